@@ -1,0 +1,1 @@
+//! Analytic test surfaces (one deterministic generator for every test, benchmark and sample).

@@ -1,0 +1,17 @@
+//! slitpath — spiral finishing toolpaths for ball-end milling of freeform surfaces with holes.
+//!
+//! The planning core is a pipeline of pure stages (see `DESIGN.md` in the shared folder and the
+//! seed paper 000, "conformal slit mapping"): each stage is one module with an options struct, a
+//! typed error and plain output data. The core has no I/O and knows nothing about the browser:
+//! `wasm` is a thin facade compiled only for `wasm32`, the CLI lives in `src/bin/`.
+//!
+//! | stage | module | status |
+//! |---|---|---|
+//! | STL → welded, validated surface | [`mesh`] | implemented |
+//! | analytic test surfaces | [`fixtures`] | implemented |
+
+pub mod fixtures;
+pub mod mesh;
+
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;

@@ -1,0 +1,237 @@
+//! Stage 1 — `mesh`: STL bytes → one welded, validated, consistently oriented surface to machine.
+//!
+//! What it computes (DESIGN.md "mesh"):
+//! 1. [`stl`]: binary or ASCII STL → triangle soup. Binary is decided by the size `84 + 50·n`,
+//!    so a binary file whose header starts with `solid` is still read as binary.
+//! 2. [`weld`]: coincident corners merged within a tolerance relative to the bounding-box
+//!    diagonal, in O(n log n); degenerate (zero-area) and duplicate faces dropped and counted.
+//! 3. [`topology`]: manifold check (an edge with more than two faces is an error naming it),
+//!    pinch vertices split, consistent orientation (re-oriented when possible), connected
+//!    components, ordered boundary loops, Euler characteristic and genus.
+//! 4. The surface to plan: the largest open component (by area), oriented so its normals face
+//!    the tool; or, for a closed solid, the machinable top surface ([`extract`]): faces whose
+//!    outward normal is within the wall angle of the tool axis, largest component. Steep walls
+//!    of bosses and pockets become holes.
+//! 5. [`geometry`]: angle-weighted vertex normals and the per-face curvature tensor of
+//!    Rusinkiewicz 2004 (seed 000 ref. [39]), needed by the scallop energy (seed 000 §2.3).
+//!
+//! Invariants of the output [`Surface`]: every edge has one or two faces, every vertex has a single
+//! fan, faces are wound counter-clockwise seen from the tool side, `loops[0]` is the outer boundary
+//! (the longest loop), and loops are ordered so the surface lies on their left seen from the tool
+//! side (outer loop counter-clockwise, holes clockwise).
+//!
+//! Bad input never panics: every fault is a [`MeshError`] that names it.
+
+pub mod extract;
+pub mod geometry;
+pub mod stl;
+pub mod topology;
+pub mod weld;
+
+use glam::DVec3;
+use serde::Serialize;
+
+pub use geometry::FaceCurvature;
+
+/// Options of the mesh stage. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshOptions {
+    /// Corners closer than this fraction of the bounding-box diagonal are welded. Default `1e-6`.
+    pub weld_tolerance_rel: f64,
+    /// Inputs with more triangles are refused before any allocation. Default 5 000 000.
+    pub max_triangles: usize,
+    /// Direction the tool comes from (unit vector, towards the tool). Default `+Z`.
+    pub tool_axis: DVec3,
+    /// For closed solids: faces whose outward normal is within this angle of the tool axis form
+    /// the machined top surface; steeper faces are walls. Degrees. Default `80`.
+    pub wall_angle_deg: f64,
+}
+
+impl Default for MeshOptions {
+    fn default() -> Self {
+        Self {
+            weld_tolerance_rel: 1e-6,
+            max_triangles: 5_000_000,
+            tool_axis: DVec3::Z,
+            wall_angle_deg: 80.0,
+        }
+    }
+}
+
+/// An indexed triangle mesh: the plain interchange type of the stage (and of [`crate::fixtures`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriMesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The surface the planner machines, with its boundary and differential geometry.
+#[derive(Clone, Debug)]
+pub struct Surface {
+    /// Vertex positions, millimetres.
+    pub positions: Vec<DVec3>,
+    /// Counter-clockwise seen from the tool side.
+    pub triangles: Vec<[u32; 3]>,
+    /// Boundary loops as vertex cycles; `loops[0]` is the outer one (the longest by length).
+    pub loops: Vec<Vec<u32>>,
+    /// Unit face normals, towards the tool side.
+    pub face_normals: Vec<DVec3>,
+    /// Face areas, mm².
+    pub face_areas: Vec<f64>,
+    /// Angle-weighted unit vertex normals, towards the tool side.
+    pub vertex_normals: Vec<DVec3>,
+    /// Per-face curvature tensor (Rusinkiewicz 2004), 1/mm; positive where convex seen from the tool.
+    pub curvature: Vec<FaceCurvature>,
+}
+
+impl Surface {
+    /// Euler characteristic `V − E + F`.
+    pub fn euler_characteristic(&self) -> i64 {
+        topology::euler_characteristic(self.positions.len(), &self.triangles)
+    }
+
+    /// Genus from `χ = 2 − 2g − b` (the surface is one connected component).
+    pub fn genus(&self) -> i64 {
+        (2 - self.loops.len() as i64 - self.euler_characteristic()) / 2
+    }
+
+    /// The planner's precondition: a connected surface of genus 0 with at least one boundary
+    /// loop (a disk with holes). Later strategies may lift the genus restriction.
+    pub fn check_plannable(&self) -> Result<(), MeshError> {
+        if self.loops.is_empty() {
+            return Err(MeshError::Closed);
+        }
+        let genus = self.genus();
+        if genus != 0 {
+            return Err(MeshError::HighGenus { genus, loops: self.loops.len() });
+        }
+        Ok(())
+    }
+
+    /// Total area, mm².
+    pub fn area(&self) -> f64 {
+        self.face_areas.iter().sum()
+    }
+}
+
+/// Topological and geometric figures of a mesh, as `slitpath info` prints them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MeshReport {
+    pub vertices: usize,
+    pub faces: usize,
+    pub edges: usize,
+    pub components: usize,
+    pub boundary_loops: usize,
+    /// Vertex count of each boundary loop, outer loop first.
+    pub loop_vertex_counts: Vec<usize>,
+    pub euler_characteristic: i64,
+    /// Total genus over all components.
+    pub genus: i64,
+    /// No boundary edge at all (a watertight solid).
+    pub closed: bool,
+    pub degenerate_faces_dropped: usize,
+    pub duplicate_faces_dropped: usize,
+    pub pinch_vertices_split: usize,
+    /// Faces whose winding was flipped to make the orientation consistent.
+    pub faces_reoriented: usize,
+    /// Faces in components other than the one planned.
+    pub faces_in_other_components: usize,
+    pub area_mm2: f64,
+    /// `[[min x, min y, min z], [max x, max y, max z]]`, millimetres.
+    pub bbox: [[f64; 3]; 2],
+    /// For a closed solid: the same figures for the extracted machinable top surface.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machined: Option<Box<MeshReport>>,
+}
+
+/// The result of the stage: the report of the whole model and the surface to plan.
+#[derive(Clone, Debug)]
+pub struct MeshOutput {
+    pub report: MeshReport,
+    pub surface: Surface,
+}
+
+/// Everything that can be wrong with an input model. Variants carry the index at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    #[error("the STL file is empty")]
+    Empty,
+    #[error("truncated binary STL: it declares {triangles} triangles ({expected_bytes} bytes) but has {actual_bytes} bytes")]
+    Truncated { triangles: u64, expected_bytes: u64, actual_bytes: u64 },
+    #[error("not a valid STL: line {line}: {message}")]
+    AsciiSyntax { line: usize, message: String },
+    #[error("triangle {triangle} has a non-finite coordinate (NaN or infinity)")]
+    NonFinite { triangle: usize },
+    #[error("the model has {count} triangles, more than the limit of {cap}")]
+    TooManyTriangles { count: u64, cap: usize },
+    #[error("the STL has no triangles")]
+    NoTriangles,
+    #[error("all {dropped} triangles are degenerate (zero area): nothing is left to machine")]
+    AllDegenerate { dropped: usize },
+    #[error("non-manifold edge between vertices {a} {pa:?} and {b} {pb:?}: it is shared by {faces} faces (at most 2 allowed)")]
+    NonManifoldEdge { a: u32, b: u32, pa: [f64; 3], pb: [f64; 3], faces: usize },
+    #[error("the surface is not orientable (like a Möbius strip): the winding conflicts at the edge between vertices {a} and {b}")]
+    NonOrientable { a: u32, b: u32 },
+    #[error("no face of the closed solid faces the tool axis {axis:?} within the wall angle of {wall_angle_deg}°: pick another tool axis")]
+    NothingFacesTool { axis: [f64; 3], wall_angle_deg: f64 },
+    #[error("the surface to machine is closed (it has no boundary loop): it cannot be flattened")]
+    Closed,
+    #[error("the surface to machine has genus {genus} ({loops} boundary loops): only surfaces of genus 0 (a disk with holes) can be planned yet")]
+    HighGenus { genus: i64, loops: usize },
+    #[error("invalid mesh option: {0}")]
+    InvalidOption(String),
+}
+
+/// Reads STL bytes and returns the report and the surface to plan (one-off entry of the stage).
+pub fn load(bytes: &[u8], options: &MeshOptions) -> Result<MeshOutput, MeshError> {
+    check_options(options)?;
+    let soup = stl::read(bytes, options.max_triangles)?;
+    from_triangles(&soup, options)
+}
+
+/// Same as [`load`] from a triangle soup or an indexed mesh (corners are welded again).
+pub fn from_triangles(mesh: &TriMesh, options: &MeshOptions) -> Result<MeshOutput, MeshError> {
+    check_options(options)?;
+    let welded = weld::weld(mesh, options.weld_tolerance_rel)?;
+    let topo = topology::analyse(&welded.mesh)?;
+    let mut report = topology::report(&welded.mesh, &topo);
+    report.degenerate_faces_dropped = welded.degenerate_dropped;
+    report.duplicate_faces_dropped = welded.duplicates_dropped;
+
+    let axis = options.tool_axis.normalize();
+    let surface_mesh = if report.closed {
+        let top = extract::top_surface(&topo.mesh, axis, options.wall_angle_deg)?;
+        let top_topo = topology::analyse(&top)?;
+        let mut machined = topology::report(&top_topo.mesh, &top_topo);
+        let (largest, others) = topology::largest_component(&top_topo);
+        machined.faces_in_other_components = others;
+        report.machined = Some(Box::new(machined));
+        largest
+    } else {
+        let (largest, others) = topology::largest_component(&topo);
+        report.faces_in_other_components = others;
+        largest
+    };
+    let surface = geometry::build_surface(surface_mesh, axis)?;
+    Ok(MeshOutput { report, surface })
+}
+
+fn check_options(options: &MeshOptions) -> Result<(), MeshError> {
+    let o = options;
+    if !(o.weld_tolerance_rel.is_finite() && o.weld_tolerance_rel >= 0.0 && o.weld_tolerance_rel < 0.1) {
+        return Err(MeshError::InvalidOption(format!(
+            "weld tolerance {} must be in [0, 0.1) of the bounding-box diagonal",
+            o.weld_tolerance_rel
+        )));
+    }
+    if !(o.tool_axis.is_finite() && o.tool_axis.length() > 1e-12) {
+        return Err(MeshError::InvalidOption(format!("tool axis {:?} must be a non-zero vector", o.tool_axis)));
+    }
+    if !(o.wall_angle_deg > 0.0 && o.wall_angle_deg < 90.0) {
+        return Err(MeshError::InvalidOption(format!(
+            "wall angle {}° must be strictly between 0° and 90°",
+            o.wall_angle_deg
+        )));
+    }
+    Ok(())
+}
