@@ -1,7 +1,9 @@
 //! Integration tests of the mesh stage: bad input is a named error, real meshes give the figures
 //! their sources state, closed solids yield their machinable top surface.
+#![cfg(not(target_arch = "wasm32"))]
 
 use glam::DVec3;
+use slitpath::fixtures;
 use slitpath::mesh::{self, stl, MeshError, MeshOptions, TriMesh};
 use std::path::PathBuf;
 
@@ -309,4 +311,50 @@ fn ktoolcav_cavity_is_machined_along_minus_y() {
     let options = MeshOptions { tool_axis: DVec3::NEG_Y, ..Default::default() };
     let out = mesh::load(&bytes, &options).unwrap();
     assert!(out.surface.face_normals.iter().all(|n| n.dot(DVec3::NEG_Y) >= 80f64.to_radians().cos() - 1e-12));
+}
+
+/// Principal curvatures of every face within 2% of the analytic ones.
+fn check_principal(mesh: TriMesh, expected: (f64, f64), what: &str) {
+    let surface = mesh::geometry::build_surface(mesh::topology::Component { mesh, loops: Vec::new() }).unwrap();
+    let mut worst: f64 = 0.0;
+    for c in &surface.curvature {
+        let (k1, k2, _) = c.principal();
+        let scale = expected.0.abs().max(expected.1.abs());
+        worst = worst.max(((k1 - expected.0).abs()).max((k2 - expected.1).abs()) / scale);
+    }
+    eprintln!("{what}: worst relative principal-curvature error {worst:.2e}");
+    assert!(worst < 0.02, "{what}: {worst}");
+}
+
+#[test]
+fn curvature_of_a_fine_sphere_is_one_over_r() {
+    let r = 25.0;
+    check_principal(fixtures::sphere(r, 5), (1.0 / r, 1.0 / r), "sphere");
+}
+
+#[test]
+fn curvature_of_a_cylinder_is_one_over_r_and_zero() {
+    let r = 10.0;
+    let m = fixtures::cylinder(r, 30.0, 128, 24);
+    let surface = mesh::geometry::build_surface(mesh::topology::Component { mesh: m.clone(), loops: Vec::new() }).unwrap();
+    // Along the axis the normal curvature vanishes; around it, 1/r.
+    for c in &surface.curvature {
+        assert!(c.normal_curvature(DVec3::Z).abs() < 0.02 / r);
+    }
+    check_principal(m, (1.0 / r, 0.0), "cylinder");
+}
+
+#[test]
+fn every_fixture_loads_with_its_topology() {
+    for name in fixtures::NAMES {
+        let m = fixtures::by_name(name).unwrap();
+        let out = mesh::load(&stl::write_binary(&m, name), &MeshOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = &out.report;
+        assert_eq!(r.faces, m.triangles.len(), "{name}");
+        assert_eq!(r.degenerate_faces_dropped + r.duplicate_faces_dropped + r.pinch_vertices_split, 0, "{name}");
+        out.surface.check_plannable().unwrap_or_else(|e| panic!("{name}: {e}"));
+        // Every planned surface faces the tool on average.
+        let up: f64 = out.surface.face_normals.iter().zip(&out.surface.face_areas).map(|(n, a)| n.z * a).sum();
+        assert!(up > 0.0, "{name}");
+    }
 }
