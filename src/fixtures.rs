@@ -12,10 +12,10 @@
 //! `rand`, no hash-map order; the little jitter used to break lattice ties comes from a seeded
 //! SplitMix64.
 //!
-//! The holed planar domains come from one small mesher ([`planar_domain_with_holes`]): a
+//! The holed planar domains come from one small internal mesher (`planar_domain_with_holes`): a
 //! triangular lattice clipped away from the boundary, boundary vertices placed exactly on the
-//! analytic curves, a Bowyer–Watson Delaunay triangulation of the lot, light smoothing. The curved fixtures
-//! are height fields over such domains, so their projection keeps the planar mesh quality.
+//! analytic curves, a Bowyer–Watson Delaunay triangulation of the lot, light smoothing. The curved
+//! fixtures are height fields over such domains, so their projection keeps the planar mesh quality.
 
 use crate::mesh::TriMesh;
 use glam::{DVec2, DVec3};
