@@ -11,6 +11,7 @@
 //! | analytic test surfaces | [`fixtures`] | implemented |
 
 pub mod fixtures;
+pub mod linalg;
 pub mod mesh;
 
 #[cfg(target_arch = "wasm32")]
