@@ -96,18 +96,14 @@ fn assemble_lower(n: usize, triplets: &[(usize, usize, f64)]) -> Result<LowerCsc
     for c in 0..n {
         col_ptr[c + 1] += col_ptr[c];
     }
-    Ok(LowerCsc {
-        col_ptr,
-        row_idx,
-        values,
-    })
+    Ok(LowerCsc { col_ptr, row_idx, values })
 }
 
 fn map_llt_error(e: faer::sparse::linalg::LltError) -> LinalgError {
     match e {
-        faer::sparse::linalg::LltError::Numeric(
-            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index },
-        ) => LinalgError::NotPositiveDefinite { pivot: index },
+        faer::sparse::linalg::LltError::Numeric(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot {
+            index,
+        }) => LinalgError::NotPositiveDefinite { pivot: index },
         faer::sparse::linalg::LltError::Generic(g) => LinalgError::Faer(format!("{g:?}")),
     }
 }
@@ -121,18 +117,10 @@ impl SparseCholesky {
         }
         let csc = assemble_lower(n, triplets)?;
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &csc.col_ptr, None, &csc.row_idx);
-        let symbolic = SymbolicLlt::try_new(sym, Side::Lower)
-            .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        let symbolic = SymbolicLlt::try_new(sym, Side::Lower).map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
         let mat = SparseColMatRef::new(sym, &csc.values);
-        let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower)
-            .map_err(map_llt_error)?;
-        Ok(Self {
-            n,
-            col_ptr: csc.col_ptr,
-            row_idx: csc.row_idx,
-            symbolic,
-            llt,
-        })
+        let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower).map_err(map_llt_error)?;
+        Ok(Self { n, col_ptr: csc.col_ptr, row_idx: csc.row_idx, symbolic, llt })
     }
 
     /// New numeric values with the same sparsity pattern (reuses the symbolic analysis).
@@ -141,23 +129,12 @@ impl SparseCholesky {
         let csc = assemble_lower(self.n, triplets)?;
         if csc.col_ptr != self.col_ptr || csc.row_idx != self.row_idx {
             return Err(LinalgError::PatternMismatch {
-                detail: format!(
-                    "{} stored lower-triangle entries, {} given",
-                    self.row_idx.len(),
-                    csc.row_idx.len()
-                ),
+                detail: format!("{} stored lower-triangle entries, {} given", self.row_idx.len(), csc.row_idx.len()),
             });
         }
-        let sym = SymbolicSparseColMatRef::new_checked(
-            self.n,
-            self.n,
-            &self.col_ptr,
-            None,
-            &self.row_idx,
-        );
+        let sym = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
         let mat = SparseColMatRef::new(sym, &csc.values);
-        self.llt = Llt::try_new_with_symbolic(self.symbolic.clone(), mat, Side::Lower)
-            .map_err(map_llt_error)?;
+        self.llt = Llt::try_new_with_symbolic(self.symbolic.clone(), mat, Side::Lower).map_err(map_llt_error)?;
         Ok(())
     }
 
@@ -313,9 +290,7 @@ mod tests {
     fn dense_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
         let n = b.len();
         for k in 0..n {
-            let p = (k..n)
-                .max_by(|&x, &y| a[x][k].abs().total_cmp(&a[y][k].abs()))
-                .unwrap();
+            let p = (k..n).max_by(|&x, &y| a[x][k].abs().total_cmp(&a[y][k].abs())).unwrap();
             a.swap(k, p);
             b.swap(k, p);
             for r in k + 1..n {
@@ -391,10 +366,7 @@ mod tests {
         let (dense, trip) = random_spd(n, &mut rng);
         let mut chol = SparseCholesky::new(n, &trip).unwrap();
         // Same pattern, diagonal shifted by 3.
-        let trip2: Vec<_> = trip
-            .iter()
-            .map(|&(r, c, v)| (r, c, if r == c { v + 3.0 } else { v }))
-            .collect();
+        let trip2: Vec<_> = trip.iter().map(|&(r, c, v)| (r, c, if r == c { v + 3.0 } else { v })).collect();
         chol.refactor(&trip2).unwrap();
         let mut dense2 = dense.clone();
         for (i, row) in dense2.iter_mut().enumerate() {
@@ -413,38 +385,19 @@ mod tests {
         trip3.push((0, n - 1, 1e-3));
         let had_entry = trip2.iter().any(|&(r, c, _)| r == n - 1 && c == 0);
         if !had_entry {
-            assert!(matches!(
-                chol.refactor(&trip3),
-                Err(LinalgError::PatternMismatch { .. })
-            ));
+            assert!(matches!(chol.refactor(&trip3), Err(LinalgError::PatternMismatch { .. })));
         }
     }
 
     #[test]
     fn typed_errors() {
-        assert_eq!(
-            SparseCholesky::new(2, &[(0, 2, 1.0)]).unwrap_err(),
-            LinalgError::BadIndex {
-                row: 0,
-                col: 2,
-                n: 2
-            }
-        );
-        assert_eq!(
-            SparseCholesky::new(2, &[(1, 1, f64::NAN)]).unwrap_err(),
-            LinalgError::NonFinite { row: 1, col: 1 }
-        );
+        assert_eq!(SparseCholesky::new(2, &[(0, 2, 1.0)]).unwrap_err(), LinalgError::BadIndex { row: 0, col: 2, n: 2 });
+        assert_eq!(SparseCholesky::new(2, &[(1, 1, f64::NAN)]).unwrap_err(), LinalgError::NonFinite { row: 1, col: 1 });
         // Singular Neumann Laplacian of one edge: not positive definite.
         let l = cotan_laplacian_triplets(&[(0, 1, 1.0)], None);
-        assert!(matches!(
-            SparseCholesky::new(2, &l).unwrap_err(),
-            LinalgError::NotPositiveDefinite { .. }
-        ));
+        assert!(matches!(SparseCholesky::new(2, &l).unwrap_err(), LinalgError::NotPositiveDefinite { .. }));
         let indefinite = [(0, 0, 1.0), (1, 1, -1.0)];
-        assert!(matches!(
-            SparseCholesky::new(2, &indefinite).unwrap_err(),
-            LinalgError::NotPositiveDefinite { .. }
-        ));
+        assert!(matches!(SparseCholesky::new(2, &indefinite).unwrap_err(), LinalgError::NotPositiveDefinite { .. }));
         assert_eq!(SparseCholesky::new(0, &[]).unwrap_err(), LinalgError::Empty);
     }
 
