@@ -9,9 +9,13 @@
 //! |---|---|---|
 //! | STL → welded, validated surface | [`mesh`] | implemented |
 //! | analytic test surfaces | [`fixtures`] | implemented |
+//! | sparse Cholesky, cotan Laplacian | [`linalg`] | implemented |
+//! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
 
 pub mod fixtures;
+pub mod linalg;
 pub mod mesh;
+pub mod slitmap;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
