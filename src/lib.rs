@@ -9,8 +9,10 @@
 //! |---|---|---|
 //! | STL → welded, validated surface | [`mesh`] | implemented |
 //! | analytic test surfaces | [`fixtures`] | implemented |
+//! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 
 pub mod fixtures;
+pub mod flatten;
 pub mod linalg;
 pub mod mesh;
 
