@@ -380,7 +380,7 @@ fn solver_is_reusable_and_takes_scale_factors() {
     // 3D area: the same shape.
     let c = solver.flatten_with_scale_factors(&vec![0.3; solver.outer_len()]).unwrap();
     assert!(rigid_residual(&a.uv, &c.uv) / diameter(&a.uv) < 1e-9);
-    assert!(matches!(solver.flatten_with_scale_factors(&[0.0]), Err(FlattenError::ScaleFactorCount { got: 1, .. })));
+    assert!(matches!(solver.flatten_with_scale_factors(&[0.0]), Err(FlattenError::BoundaryDataLength { got: 1, .. })));
 }
 
 #[test]

@@ -178,7 +178,7 @@ impl BffSolver {
     /// angles `(1−t)·k̃_free + t·k̃_disk` for t = 1/8, 1/4, 1/2, 1, the first valid one wins.
     pub fn flatten(&self) -> Result<Flattening, FlattenError> {
         if self.options.boundary == BoundaryTarget::Disk {
-            return self.flatten_with_curvature(&self.disk_curvature()).map(|f| Flattening { disk_blend: 1.0, ..f });
+            return self.flatten_disk();
         }
         let (u, k_free) = self.free_solve(&vec![0.0; self.outer.len()]);
         let free = self.layout(&u, &k_free, BoundaryTarget::Free);
@@ -207,7 +207,7 @@ impl BffSolver {
     pub fn flatten_with_scale_factors(&self, u_boundary: &[f64]) -> Result<Flattening, FlattenError> {
         let nb = self.outer.len();
         if u_boundary.len() != nb {
-            return Err(FlattenError::ScaleFactorCount { expected: nb, got: u_boundary.len() });
+            return Err(FlattenError::BoundaryDataLength { expected: nb, got: u_boundary.len() });
         }
         let (u, k_target) = self.free_solve(u_boundary);
         self.layout(&u, &k_target, BoundaryTarget::Free)
@@ -232,6 +232,12 @@ impl BffSolver {
         (u, k_target)
     }
 
+    /// Flattening onto a convex, nearly circular outer loop (BFF §5.2): the exterior angles of
+    /// [`BffSolver::flatten_with_curvature`] set to `2π·(dual length)/L`.
+    pub fn flatten_disk(&self) -> Result<Flattening, FlattenError> {
+        self.flatten_with_curvature(&self.disk_curvature())
+    }
+
     /// Exterior angles of the disk target: `2π·(dual length)/L`.
     fn disk_curvature(&self) -> Vec<f64> {
         let nb = self.outer.len();
@@ -245,7 +251,7 @@ impl BffSolver {
     pub fn flatten_with_curvature(&self, k_target: &[f64]) -> Result<Flattening, FlattenError> {
         let nb = self.outer.len();
         if k_target.len() != nb {
-            return Err(FlattenError::ScaleFactorCount { expected: nb, got: k_target.len() });
+            return Err(FlattenError::BoundaryDataLength { expected: nb, got: k_target.len() });
         }
         let sum: f64 = k_target.iter().sum();
         if !((sum - 2.0 * PI).abs() < 1e-6) {

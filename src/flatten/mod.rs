@@ -5,11 +5,15 @@
 //! boundary of minimal area distortion of Sawhney & Crane 2017, "Boundary First Flattening"
 //! (ACM TOG 37(1)), i.e. the log scale factor is `u = 0` on the outer boundary:
 //!
-//! 1. Holes are filled with virtual faces (a fan around a virtual vertex at the hole's
-//!    length-weighted centroid), as BFF's reference implementation does, so the surface becomes a
-//!    disk whose only boundary is `loops[0]`. The virtual elements are dropped at the end; hole
-//!    rims are then interior curves of a conformal map of a disk, so they stay simple and inside.
-//! 2. Yamabe problem with flat target: `A_II u_I = −Ω_I − A_IB u_B` (A the cotan Laplacian,
+//! 1. Holes are filled with virtual faces, as BFF's reference implementation does, so the surface
+//!    becomes a disk whose only boundary is `loops[0]`: a fan around one virtual vertex per hole.
+//!    Unlike a fan to the 3D centroid, the fan is *intrinsic*: the rim is laid out in the plane
+//!    with the angles the real triangles leave free (closed like step 3), the virtual vertex at
+//!    its area centroid, and the fan's angles and cotan weights taken from that layout. The
+//!    filling then adds no curvature where none is needed, so developable surfaces with holes
+//!    flatten exactly isometrically. Virtual elements are dropped at the end; hole rims are
+//!    interior curves of a conformal map of a disk, so they stay simple and inside.
+//! 2. Yamabe problem with flat target (all interior and virtual vertices): `A_II u_I = −Ω_I − A_IB u_B` (A the cotan Laplacian,
 //!    Ω the angle defects), then the Dirichlet-to-Neumann map gives the boundary flux
 //!    `h = (A u)_B` and the target exterior angles `k̃ = k + h` (BFF eq. 8, with `k = π − Σθ`).
 //! 3. The boundary curve is integrated from the target lengths `ℓ̃ = e^{(u_i+u_j)/2} ℓ` and the
@@ -35,8 +39,14 @@
 //! disjoint and inside the outer loop.
 //!
 //! [`BffSolver`] factorises the Laplacian blocks once per mesh (Dirichlet block `A_II`, and the
-//! Neumann Laplacian with one vertex pinned for the conjugate) and reuses them for every solve;
-//! [`flatten`] is the one-off entry.
+//! Neumann Laplacian with one vertex pinned, for the conjugate and for prescribed boundary angles)
+//! and reuses them for every solve: [`BffSolver::flatten`], [`BffSolver::flatten_with_scale_factors`]
+//! (BFF with given boundary scale factors), [`BffSolver::flatten_with_curvature`] (given boundary
+//! exterior angles), [`BffSolver::flatten_disk`]. [`flatten`] is the one-off entry.
+//!
+//! Cost: two sparse Cholesky factorisations (faer, via [`crate::linalg`]) per mesh, then per
+//! flattening three or four triangular solves and O(n) work; the beetle (30k vertices, 11 loops)
+//! factorises in about 150 ms and flattens in about 30 ms natively in release mode.
 
 // `!(x > 0.0)` is deliberate throughout: NaN must fail every validity test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -183,8 +193,8 @@ pub enum FlattenError {
     DegenerateHoleFill { hole: usize },
     #[error("sparse factorisation failed: {0}")]
     Factorisation(LinalgError),
-    #[error("boundary scale factors: expected {expected} values (one per outer-loop vertex), got {got}")]
-    ScaleFactorCount { expected: usize, got: usize },
+    #[error("boundary data: expected {expected} values (one per outer-loop vertex), got {got}")]
+    BoundaryDataLength { expected: usize, got: usize },
     #[error("the boundary curve cannot be closed with positive edge lengths (edge {edge} of the outer loop)")]
     BoundaryClosure { edge: usize },
     #[error("the linear solve produced non-finite values")]
