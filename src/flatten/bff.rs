@@ -519,7 +519,8 @@ fn close_polygon(tangents: &[DVec2], target: &[f64], mass: &[f64]) -> Result<Vec
 /// angles left over by the real triangles (`π − (2π − Σθ)`), the mismatch to 2π spread by dual
 /// length, closed as in BFF §4.3, and `c` put at its area centroid. On a developable surface this
 /// is exactly the hole of the isometric flattening, so the filling adds no curvature; a 3D
-/// centroid fan would. Adds the fan's angles and cotan weights; `None` if degenerate.
+/// centroid fan would (it is the fallback when the layout fails). Adds the fan's angles and
+/// cotan weights; `None` if both fans are degenerate.
 fn fill_hole(
     positions: &[DVec3],
     rim: &[u32],
@@ -547,33 +548,52 @@ fn fill_hole(
             DVec2::new(phi.cos(), phi.sin())
         })
         .collect();
-    let pts = close_polygon(&tangents, &len, &len).ok()?;
-    let (mut area, mut moment) = (0.0, DVec2::ZERO);
-    for m in 0..n {
-        let (a, b) = (pts[m], pts[(m + 1) % n]);
-        let cr = a.perp_dot(b);
-        area += 0.5 * cr;
-        moment += cr * (a + b) / 6.0;
-    }
-    let centre = if area > 0.0 { moment / area } else { pts.iter().copied().sum::<DVec2>() / n as f64 };
-    for m in 0..n {
-        let tri = [(q[m], pts[m]), (q[(m + 1) % n], pts[(m + 1) % n]), (c, centre)];
-        let lmax = (0..3).map(|k| (tri[(k + 1) % 3].1 - tri[k].1).length_squared()).fold(0.0, f64::max);
-        let cross = (tri[1].1 - tri[0].1).perp_dot(tri[2].1 - tri[0].1).abs();
-        if !(cross > 1e-12 * lmax) {
-            return None;
+    let intrinsic = close_polygon(&tangents, &len, &len).ok().and_then(|pts| {
+        let (mut area, mut moment) = (0.0, DVec2::ZERO);
+        for m in 0..n {
+            let (a, b) = (pts[m], pts[(m + 1) % n]);
+            let cr = a.perp_dot(b);
+            area += 0.5 * cr;
+            moment += cr * (a + b) / 6.0;
         }
+        let centre = if area > 0.0 { moment / area } else { pts.iter().copied().sum::<DVec2>() / n as f64 };
+        let fan: Vec<[DVec3; 3]> =
+            (0..n).map(|m| [pts[m].extend(0.0), pts[(m + 1) % n].extend(0.0), centre.extend(0.0)]).collect();
+        fan_ok(&fan).then_some(fan)
+    });
+    // Fallback when the rim cannot be laid out: the plain fan to the 3D length-weighted centroid.
+    let fan = intrinsic.or_else(|| {
+        let mut sum = DVec3::ZERO;
+        for m in 0..n {
+            sum += 0.5 * (positions[q[m] as usize] + positions[q[(m + 1) % n] as usize]) * len[m];
+        }
+        let centre = sum / total;
+        let fan: Vec<[DVec3; 3]> =
+            (0..n).map(|m| [positions[q[m] as usize], positions[q[(m + 1) % n] as usize], centre]).collect();
+        fan_ok(&fan).then_some(fan)
+    })?;
+    for (m, corners) in fan.iter().enumerate() {
+        let ids = [q[m], q[(m + 1) % n], c];
+        let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]).length();
         for k in 0..3 {
-            let (v, p) = tri[k];
-            let (a, pa) = tri[(k + 1) % 3];
-            let (b, pb) = tri[(k + 2) % 3];
+            let (v, p) = (ids[k], corners[k]);
+            let (a, pa) = (ids[(k + 1) % 3], corners[(k + 1) % 3]);
+            let (b, pb) = (ids[(k + 2) % 3], corners[(k + 2) % 3]);
             let (e1, e2) = (pa - p, pb - p);
             angle_sum[v as usize] += cross.atan2(e1.dot(e2));
-            let w = 0.5 * e1.dot(e2) / cross;
-            weights.push((a.min(b), a.max(b), w));
+            weights.push((a.min(b), a.max(b), 0.5 * e1.dot(e2) / cross));
         }
     }
     Some(())
+}
+
+/// Every fan triangle non-degenerate (area above 1e-12 of its longest edge squared) and finite.
+fn fan_ok(fan: &[[DVec3; 3]]) -> bool {
+    fan.iter().all(|t| {
+        let lmax = (0..3).map(|k| (t[(k + 1) % 3] - t[k]).length_squared()).fold(0.0, f64::max);
+        let cross = (t[1] - t[0]).cross(t[2] - t[0]).length();
+        cross.is_finite() && cross > 1e-12 * lmax
+    })
 }
 
 #[cfg(test)]
