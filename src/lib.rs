@@ -9,10 +9,12 @@
 //! |---|---|---|
 //! | STL → welded, validated surface | [`mesh`] | implemented |
 //! | analytic test surfaces | [`fixtures`] | implemented |
-//! | sparse Cholesky, cotan Laplacian | [`linalg`] | implemented |
+//! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
+//! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 
 pub mod fixtures;
+pub mod flatten;
 pub mod linalg;
 pub mod mesh;
 pub mod slitmap;
