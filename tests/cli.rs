@@ -108,3 +108,60 @@ fn shared_meshes_as_the_issue_states() {
         }
     }
 }
+
+#[test]
+fn map_writes_json_and_svg_for_disk_and_annulus_poles() {
+    let part = temp("freeform.stl");
+    std::fs::write(&part, mesh::stl::write_binary(&fixtures::freeform_4_holes(), "freeform")).unwrap();
+    let expected = mesh::load(&std::fs::read(&part).unwrap(), &Default::default()).unwrap();
+    for (pole, mode) in [(vec!["--pole", "centroid"], "disk"), (vec!["--pole", "hole:2"], "annulus")] {
+        let (json_path, svg_path) = (temp("map.json"), temp("map.svg"));
+        let mut args = vec!["map", part.to_str().unwrap(), "--json", json_path.to_str().unwrap()];
+        args.extend(["--svg", svg_path.to_str().unwrap()]);
+        args.extend(pole.iter().copied());
+        let out = slitpath(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json_path).unwrap()).unwrap();
+        assert_eq!(v["mode"], mode, "{pole:?}");
+        let w = v["w"].as_array().unwrap();
+        assert_eq!(w.len(), expected.surface.positions.len());
+        assert_eq!(v["vertices"].as_array().unwrap().len(), w.len());
+        // One slit per hole that is not the annulus' inner circle; all inside the unit disk.
+        let holes = expected.surface.loops.len() - 1;
+        assert_eq!(v["slits"].as_array().unwrap().len(), if mode == "disk" { holes } else { holes - 1 });
+        for s in v["slits"].as_array().unwrap() {
+            let r = s["radius"].as_f64().unwrap();
+            assert!(r > 0.0 && r < 1.0, "{s}");
+        }
+        if mode == "annulus" {
+            let r = v["inner_radius"].as_f64().unwrap();
+            assert!(r > 0.0 && r < 1.0);
+        }
+        assert!(w.iter().all(|p| p[0].as_f64().unwrap().hypot(p[1].as_f64().unwrap()) <= 1.0 + 1e-9));
+        assert_eq!(v["flatten"]["flipped_triangles"], 0);
+        let svg = std::fs::read_to_string(&svg_path).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>") && svg.contains("<polygon"));
+    }
+}
+
+#[test]
+fn map_with_a_3d_pole_and_bad_poles() {
+    let part = temp("plate_map.stl");
+    std::fs::write(&part, mesh::stl::write_binary(&fixtures::plate_3_holes(), "plate")).unwrap();
+    let json_path = temp("plate_map.json");
+    let p = part.to_str().unwrap();
+    let j = json_path.to_str().unwrap();
+    // The plate spans x, y in [-50, 50] × [-40, 40] around its centre; a point above it lands on it.
+    let out = slitpath(&["map", p, "--pole-3d", "-30,-25,10", "--json", j]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json_path).unwrap()).unwrap();
+    assert_eq!(v["mode"], "disk");
+    assert!((v["pole_3d"][2].as_f64().unwrap()).abs() < 1e-9, "moved onto the plate");
+    for bad in [vec!["--pole", "hole:9"], vec!["--pole", "middle"], vec!["--pole-3d", "1,2"]] {
+        let mut args = vec!["map", p, "--json", j];
+        args.extend(bad.iter().copied());
+        let out = slitpath(&args);
+        assert!(!out.status.success(), "{bad:?}");
+        assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+    }
+}

@@ -2,9 +2,16 @@
 //!
 //! Subcommands:
 //! - `info PART.stl [--json]`: the mesh report (topology, boundary loops, machined top surface).
+//! - `map PART.stl [--pole-3d X,Y,Z | --pole hole:N | --pole centroid] --json OUT.json [--svg OUT.svg]`:
+//!   flattens the part and writes its conformal slit map.
 //! - `fixture NAME -o FILE.stl`: writes one of the analytic test surfaces as binary STL.
 //!
 //! Errors go to stderr as one line and the exit code is non-zero; no panic reaches the user.
+
+#[cfg(not(target_arch = "wasm32"))]
+mod map;
+#[cfg(not(target_arch = "wasm32"))]
+mod svg;
 
 #[cfg(not(target_arch = "wasm32"))]
 mod cli {
@@ -30,6 +37,25 @@ mod cli {
             #[command(flatten)]
             mesh: MeshArgs,
         },
+        /// Flattens the part and writes its conformal slit map (seed 000 §2.1).
+        Map {
+            part: PathBuf,
+            /// `centroid` (default) or `hole:N` (the annulus map of hole N, 1-based).
+            #[arg(long, value_parser = crate::map::parse_pole, conflicts_with = "pole_3d")]
+            pole: Option<crate::map::PoleChoice>,
+            /// A pole in the part's coordinates, moved to the nearest surface point.
+            #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+            pole_3d: Option<[f64; 3]>,
+            /// Where to write the JSON (`mode`, `inner_radius`, `slits`, `flipped_triangles`,
+            /// `flatten`, `vertices`, `uv`, `w`).
+            #[arg(long)]
+            json: PathBuf,
+            /// Where to write an SVG drawing of the flattened and the slit domain.
+            #[arg(long)]
+            svg: Option<PathBuf>,
+            #[command(flatten)]
+            mesh: MeshArgs,
+        },
         /// Writes an analytic test surface as binary STL.
         Fixture {
             /// One of the fixture names (see `slitpath fixture --list`).
@@ -46,7 +72,7 @@ mod cli {
     #[derive(clap::Args)]
     struct MeshArgs {
         /// Tool axis (towards the tool), e.g. `0,0,1`.
-        #[arg(long, value_parser = parse_vec3, default_value = "0,0,1")]
+        #[arg(long, value_parser = parse_vec3, default_value = "0,0,1", allow_hyphen_values = true)]
         axis: [f64; 3],
         /// Closed solids: faces within this angle of the tool axis form the machined top, degrees.
         #[arg(long, default_value_t = mesh::MeshOptions::default().wall_angle_deg)]
@@ -88,6 +114,22 @@ mod cli {
                 }
                 Ok(())
             }
+            Command::Map { part, pole, pole_3d, json, svg, mesh: args } => {
+                let bytes = std::fs::read(&part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
+                let out = mesh::load(&bytes, &args.options()).map_err(|e| format!("{}: {e}", part.display()))?;
+                let pole = match (pole, pole_3d) {
+                    (_, Some(p)) => crate::map::PoleChoice::Point3d(glam::DVec3::from_array(p)),
+                    (Some(p), None) => p,
+                    (None, None) => crate::map::PoleChoice::Centroid,
+                };
+                let result = crate::map::run(&out.surface, &pole).map_err(|e| format!("{}: {e}", part.display()))?;
+                let text = serde_json::to_string(&result.json).map_err(|e| e.to_string())?;
+                write(&json, text.as_bytes())?;
+                if let Some(svg) = svg {
+                    write(&svg, result.svg.as_bytes())?;
+                }
+                Ok(())
+            }
             Command::Fixture { list: true, .. } => {
                 fixtures::NAMES.iter().for_each(|n| println!("{n}"));
                 Ok(())
@@ -96,13 +138,16 @@ mod cli {
                 let (name, output) = (name.expect("required by clap"), output.expect("required by clap"));
                 let mesh = fixtures::by_name(&name)
                     .ok_or_else(|| format!("unknown fixture `{name}`; known: {}", fixtures::NAMES.join(", ")))?;
-                let bytes = mesh::stl::write_binary(&mesh, &format!("slitpath fixture {name}"));
-                if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-                    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-                }
-                std::fs::write(&output, bytes).map_err(|e| format!("cannot write {}: {e}", output.display()))
+                write(&output, &mesh::stl::write_binary(&mesh, &format!("slitpath fixture {name}")))
             }
         }
+    }
+
+    fn write(path: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        }
+        std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
     }
 
     fn print_report(name: &str, r: &mesh::MeshReport) {

@@ -35,9 +35,10 @@ pub fn draw(d: &SlitDrawing) -> String {
     let _ = writeln!(svg, r##"<rect width="100%" height="100%" fill="#fff"/>"##);
 
     // Left panel: the flattened domain, y up.
-    let (lo, hi) = d.uv.iter().fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
-        (lo.min(p), hi.max(p))
-    });
+    let (lo, hi) = d
+        .uv
+        .iter()
+        .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let scale = SIZE / (hi - lo).max_element().max(1e-300);
     let left = |p: DVec2| DVec2::new(MARGIN + (p.x - lo.x) * scale, MARGIN + SIZE - (p.y - lo.y) * scale);
     let modulus: Vec<f64> = d.w.iter().map(|w| w.length()).collect();
@@ -55,7 +56,8 @@ pub fn draw(d: &SlitDrawing) -> String {
             let base = arg(d.w[t[0] as usize]);
             let a = t.map(|v| base + wrap(arg(d.w[v as usize]) - base));
             // The tiny triangles around the pole span all angles; skip them.
-            if a.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x)) - a.iter().fold(f64::INFINITY, |m, &x| m.min(x)) > 1.0 {
+            if a.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x)) - a.iter().fold(f64::INFINITY, |m, &x| m.min(x)) > 1.0
+            {
                 continue;
             }
             for shift in [-TAU, 0.0, TAU] {
@@ -93,9 +95,21 @@ pub fn draw(d: &SlitDrawing) -> String {
         let dir = DVec2::from_angle(a);
         polyline(&mut svg, [right(dir * min_r), right(dir)].into_iter(), false, "#d8733b", 0.8);
     }
-    let _ = writeln!(svg, r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##, c.x, c.y, 0.48 * SIZE);
+    let _ = writeln!(
+        svg,
+        r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##,
+        c.x,
+        c.y,
+        0.48 * SIZE
+    );
     if let Some(r) = d.inner_radius {
-        let _ = writeln!(svg, r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##, c.x, c.y, r * 0.48 * SIZE);
+        let _ = writeln!(
+            svg,
+            r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##,
+            c.x,
+            c.y,
+            r * 0.48 * SIZE
+        );
     }
     for &(r, start, end) in d.slits {
         let span = (end - start).rem_euclid(TAU);
@@ -151,7 +165,8 @@ fn path(svg: &mut String, segments: &[[DVec2; 2]], map: impl Fn(DVec2) -> DVec2,
 fn polyline(svg: &mut String, points: impl Iterator<Item = DVec2>, closed: bool, colour: &str, width: f64) {
     let pts: Vec<String> = points.map(|p| format!("{:.2},{:.2}", p.x, p.y)).collect();
     let tag = if closed { "polygon" } else { "polyline" };
-    let _ = writeln!(svg, r#"<{tag} points="{}" fill="none" stroke="{colour}" stroke-width="{width}"/>"#, pts.join(" "));
+    let _ =
+        writeln!(svg, r#"<{tag} points="{}" fill="none" stroke="{colour}" stroke-width="{width}"/>"#, pts.join(" "));
 }
 
 fn label(svg: &mut String, x: f64, text: &str) {
