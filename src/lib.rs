@@ -13,6 +13,7 @@
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 
+pub mod bench;
 pub mod fixtures;
 pub mod flatten;
 pub mod linalg;

@@ -1,0 +1,116 @@
+//! Benchmark cases shared by the native benchmarks (`benches/`) and the wasm ones (headless
+//! Chromium), so both measure the same work. The clock is passed in: the core has no I/O and
+//! `std::time::Instant` does not exist on `wasm32-unknown-unknown`.
+
+use crate::fixtures;
+use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
+use crate::mesh::{self, MeshOptions, TriMesh};
+use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
+use serde::Serialize;
+
+/// Figures of one conformal-core run, milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct ConformalFigures {
+    pub name: String,
+    pub faces: usize,
+    pub holes: usize,
+    pub mesh_ms: f64,
+    /// `BffSolver::new`: both factorisations of the flattening.
+    pub flatten_factorise_ms: f64,
+    pub flatten_solve_ms: f64,
+    /// `SlitMapSolver::new`: both p-independent factorisations.
+    pub slitmap_factorise_ms: f64,
+    /// Mean over the poles of one `map(pole)` after the factorisation.
+    pub slitmap_pole_ms: f64,
+    pub poles: usize,
+}
+
+/// The analytic cases: the sample part, a 10k- and a 58k-face disk, the plate with 3 holes.
+pub fn conformal_cases() -> Vec<(String, TriMesh)> {
+    vec![
+        ("freeform_4_holes".into(), fixtures::freeform_4_holes()),
+        ("plate_3_holes".into(), fixtures::plate_3_holes()),
+        ("unit_disk(40), 9.6k faces".into(), fixtures::unit_disk(40)),
+        ("unit_disk(98), 58k faces".into(), fixtures::unit_disk(98)),
+    ]
+}
+
+/// Runs mesh → flatten → slit map for the centroid pole and every hole's pole, timing each part
+/// with `now` (milliseconds).
+pub fn run_conformal(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<ConformalFigures, String> {
+    let t = now();
+    let surface = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?.surface;
+    let mesh_ms = now() - t;
+    let t = now();
+    let bff = BffSolver::new(FlattenInput::from(&surface), &FlattenOptions::default()).map_err(|e| e.to_string())?;
+    let flatten_factorise_ms = now() - t;
+    let t = now();
+    let flat = bff.flatten().map_err(|e| e.to_string())?;
+    let flatten_solve_ms = now() - t;
+    let domain =
+        PlanarDomain { positions: flat.uv, triangles: surface.triangles.clone(), loops: surface.loops.clone() };
+    let t = now();
+    let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(|e| e.to_string())?;
+    let slitmap_factorise_ms = now() - t;
+    // Poles: the centre of the largest triangle (inside the domain) and each hole.
+    let largest = (0..domain.triangles.len())
+        .max_by(|&a, &b| tri_area(&domain, a).total_cmp(&tri_area(&domain, b)))
+        .ok_or("no triangles")?;
+    let mut poles =
+        vec![domain.triangles[largest].iter().map(|&v| domain.positions[v as usize]).sum::<glam::DVec2>() / 3.0];
+    poles.extend((1..domain.loops.len()).map(|h| solver.canonical_hole_pole(h)));
+    let t = now();
+    for &p in &poles {
+        solver.map(p).map_err(|e| e.to_string())?;
+    }
+    let slitmap_pole_ms = (now() - t) / poles.len() as f64;
+    Ok(ConformalFigures {
+        name: name.to_string(),
+        faces: surface.triangles.len(),
+        holes: surface.loops.len() - 1,
+        mesh_ms,
+        flatten_factorise_ms,
+        flatten_solve_ms,
+        slitmap_factorise_ms,
+        slitmap_pole_ms,
+        poles: poles.len(),
+    })
+}
+
+fn tri_area(d: &PlanarDomain, f: usize) -> f64 {
+    let [a, b, c] = d.triangles[f].map(|v| d.positions[v as usize]);
+    0.5 * (b - a).perp_dot(c - a)
+}
+
+/// One table row.
+pub fn format_row(f: &ConformalFigures) -> String {
+    format!(
+        "{:<28} {:>7} {:>5} {:>9.1} {:>11.1} {:>9.1} {:>11.1} {:>9.2}",
+        f.name,
+        f.faces,
+        f.holes,
+        f.mesh_ms,
+        f.flatten_factorise_ms,
+        f.flatten_solve_ms,
+        f.slitmap_factorise_ms,
+        f.slitmap_pole_ms
+    )
+}
+
+pub const TABLE_HEADER: &str =
+    "case                           faces holes   mesh ms BFF fact ms  BFF ms   slit fact ms  pole ms";
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_case_runs_and_times_every_part() {
+        let clock = std::cell::Cell::new(0.0);
+        let now = || {
+            clock.set(clock.get() + 1.0);
+            clock.get()
+        };
+        let f = super::run_conformal("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
+        assert_eq!((f.holes, f.poles), (3, 4));
+        assert!(f.mesh_ms > 0.0 && f.slitmap_pole_ms > 0.0);
+    }
+}
