@@ -49,12 +49,7 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        Self {
-            weld_tolerance_rel: 1e-6,
-            max_triangles: 5_000_000,
-            tool_axis: DVec3::Z,
-            wall_angle_deg: 80.0,
-        }
+        Self { weld_tolerance_rel: 1e-6, max_triangles: 5_000_000, tool_axis: DVec3::Z, wall_angle_deg: 80.0 }
     }
 }
 
@@ -156,7 +151,9 @@ pub struct MeshOutput {
 pub enum MeshError {
     #[error("the STL file is empty")]
     Empty,
-    #[error("truncated binary STL: it declares {triangles} triangles ({expected_bytes} bytes) but has {actual_bytes} bytes")]
+    #[error(
+        "truncated binary STL: it declares {triangles} triangles ({expected_bytes} bytes) but has {actual_bytes} bytes"
+    )]
     Truncated { triangles: u64, expected_bytes: u64, actual_bytes: u64 },
     #[error("not a valid STL: line {line}: {message}")]
     AsciiSyntax { line: usize, message: String },
@@ -192,27 +189,27 @@ pub fn load(bytes: &[u8], options: &MeshOptions) -> Result<MeshOutput, MeshError
 /// Same as [`load`] from a triangle soup or an indexed mesh (corners are welded again).
 pub fn from_triangles(mesh: &TriMesh, options: &MeshOptions) -> Result<MeshOutput, MeshError> {
     check_options(options)?;
+    let axis = options.tool_axis.normalize();
     let welded = weld::weld(mesh, options.weld_tolerance_rel)?;
-    let topo = topology::analyse(&welded.mesh)?;
-    let mut report = topology::report(&welded.mesh, &topo);
+    let topo = topology::analyse(&welded.mesh, axis)?;
+    let mut report = topology::report(&topo);
     report.degenerate_faces_dropped = welded.degenerate_dropped;
     report.duplicate_faces_dropped = welded.duplicates_dropped;
 
-    let axis = options.tool_axis.normalize();
-    let surface_mesh = if report.closed {
-        let top = extract::top_surface(&topo.mesh, axis, options.wall_angle_deg)?;
-        let top_topo = topology::analyse(&top)?;
-        let mut machined = topology::report(&top_topo.mesh, &top_topo);
-        let (largest, others) = topology::largest_component(&top_topo);
-        machined.faces_in_other_components = others;
+    let (best, mut component) = topology::largest_component(&topo);
+    report.faces_in_other_components = topo.mesh.triangles.len() - topo.components[best].faces;
+    if topo.components[best].closed() {
+        // A solid: machine what the tool sees (steep walls become holes).
+        let top = extract::top_surface(&component.mesh, axis, options.wall_angle_deg)?;
+        let top_topo = topology::analyse(&top, axis)?;
+        let (_, top_component) = topology::largest_component(&top_topo);
+        // The report describes the surface that is planned: the largest top component.
+        let mut machined = topology::report(&topology::analyse(&top_component.mesh, axis)?);
+        machined.faces_in_other_components = top.triangles.len() - top_component.mesh.triangles.len();
         report.machined = Some(Box::new(machined));
-        largest
-    } else {
-        let (largest, others) = topology::largest_component(&topo);
-        report.faces_in_other_components = others;
-        largest
-    };
-    let surface = geometry::build_surface(surface_mesh, axis)?;
+        component = top_component;
+    }
+    let surface = geometry::build_surface(component)?;
     Ok(MeshOutput { report, surface })
 }
 
