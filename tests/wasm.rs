@@ -12,9 +12,13 @@ wasm_bindgen_test_configure!(run_in_browser);
 
 type Tri = [[f32; 3]; 3];
 
-/// A binary STL. The header deliberately starts with `solid`: the size decides, not the header.
+/// A binary STL. By default the header deliberately starts with `solid`: the size decides.
 fn binary_stl(tris: &[Tri]) -> Vec<u8> {
-    let mut out = b"solid but binary: slitpath wasm test".to_vec();
+    binary_stl_with_header(tris, "solid but binary: slitpath wasm test")
+}
+
+fn binary_stl_with_header(tris: &[Tri], header: &str) -> Vec<u8> {
+    let mut out = header.as_bytes().to_vec();
     out.resize(80, b' ');
     out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
     for t in tris {
@@ -98,8 +102,9 @@ fn load(stl: &[u8], options: JsValue) -> Result<Planner, String> {
 }
 
 fn load_err(stl: &[u8], options: JsValue) -> String {
+    let shown = js_sys::JSON::stringify(&options).ok().and_then(|s| s.as_string()).unwrap_or_default();
     match load(stl, options) {
-        Ok(_) => panic!("expected an error"),
+        Ok(_) => panic!("expected an error (options {shown})"),
         Err(message) => message,
     }
 }
@@ -180,7 +185,7 @@ fn tool_axis_option_picks_another_face() {
 
 #[wasm_bindgen_test]
 fn truncated_binary_names_the_fault() {
-    let mut bytes = binary_stl(&plate_with_hole());
+    let mut bytes = binary_stl_with_header(&plate_with_hole(), "exported by a CAD system");
     bytes.truncate(bytes.len() - 30);
     let message = load_err(&bytes, JsValue::UNDEFINED);
     assert!(message.contains("truncated"), "{message}");
@@ -232,7 +237,9 @@ fn bad_options_throw() {
 fn report_keys_are_the_documented_ones() {
     let r = load(&binary_stl(&plate_with_hole()), JsValue::UNDEFINED).unwrap().report().unwrap();
     let keys: Vec<String> = Object::keys(r.unchecked_ref::<Object>()).iter().map(|k| k.as_string().unwrap()).collect();
-    for key in ["vertices", "faces", "components", "boundary_loops", "genus", "closed", "degenerate_faces_dropped", "bbox"] {
+    for key in
+        ["vertices", "faces", "components", "boundary_loops", "genus", "closed", "degenerate_faces_dropped", "bbox"]
+    {
         assert!(keys.iter().any(|k| k == key), "missing `{key}` in {keys:?}");
     }
 }

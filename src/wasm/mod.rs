@@ -12,6 +12,7 @@ use std::sync::Once;
 
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
 
 use crate::mesh::{self, MeshOptions, MeshOutput};
 
@@ -36,7 +37,7 @@ pub fn version() -> String {
 
 /// Options of the mesh stage as the page passes them; every field is optional.
 #[derive(Debug, Default, Deserialize)]
-#[serde(rename_all = "camelCase", deny_unknown_fields)]
+#[serde(rename_all = "camelCase")]
 struct JsMeshOptions {
     tool_axis: Option<[f64; 3]>,
     wall_angle_deg: Option<f64>,
@@ -45,13 +46,28 @@ struct JsMeshOptions {
 }
 
 impl JsMeshOptions {
+    const FIELDS: [&'static str; 4] = ["toolAxis", "wallAngleDeg", "weldToleranceRel", "maxTriangles"];
+
     /// `undefined` / `null` → defaults; anything else must be an object of known fields.
     fn parse(options: JsValue) -> Result<MeshOptions, JsError> {
         if options.is_undefined() || options.is_null() {
             return Ok(MeshOptions::default());
         }
-        let js: JsMeshOptions = serde_wasm_bindgen::from_value(options)
-            .map_err(|e| JsError::new(&format!("invalid mesh options: {e}")))?;
+        // serde-wasm-bindgen only reads the known fields: a misspelt one would pass unnoticed.
+        if let Some(object) = options.dyn_ref::<js_sys::Object>() {
+            if let Some(key) = js_sys::Object::keys(object)
+                .iter()
+                .filter_map(|k| k.as_string())
+                .find(|k| !Self::FIELDS.contains(&k.as_str()))
+            {
+                return Err(JsError::new(&format!(
+                    "invalid mesh options: unknown field `{key}`, expected one of {}",
+                    Self::FIELDS.join(", ")
+                )));
+            }
+        }
+        let js: JsMeshOptions =
+            serde_wasm_bindgen::from_value(options).map_err(|e| JsError::new(&format!("invalid mesh options: {e}")))?;
         let d = MeshOptions::default();
         Ok(MeshOptions {
             tool_axis: js.tool_axis.map_or(d.tool_axis, glam::DVec3::from_array),
