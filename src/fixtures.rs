@@ -76,17 +76,12 @@ pub fn unit_disk(rings: usize) -> TriMesh {
         let n = 6 * k;
         // k / rings is exactly 1.0 on the last ring, so the boundary is on the unit circle.
         let r = k as f64 / rings as f64;
-        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| {
-            DVec3::new(r * t.cos(), r * t.sin(), 0.0)
-        });
+        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * t.cos(), r * t.sin(), 0.0));
         zip_rings(&prev, &prev_frac, &ring, &frac, &mut triangles);
         prev = ring;
         prev_frac = frac;
     }
-    TriMesh {
-        positions,
-        triangles,
-    }
+    TriMesh { positions, triangles }
 }
 
 /// Flat concentric annulus `inner_radius` < |p| < 1 in z = 0, centred at the origin.
@@ -107,24 +102,15 @@ pub fn concentric_annulus(inner_radius: f64, rings: usize) -> TriMesh {
     let mut triangles = Vec::new();
     let mut prev: Option<(Vec<u32>, Vec<f64>)> = None;
     for k in 0..=rings {
-        let r = if k == rings {
-            1.0
-        } else {
-            inner_radius + k as f64 * dr
-        };
+        let r = if k == rings { 1.0 } else { inner_radius + k as f64 * dr };
         let n = ((TAU * r / dr).round() as usize).max(6);
-        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| {
-            DVec3::new(r * t.cos(), r * t.sin(), 0.0)
-        });
+        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * t.cos(), r * t.sin(), 0.0));
         if let Some((p, pf)) = &prev {
             zip_rings(p, pf, &ring, &frac, &mut triangles);
         }
         prev = Some((ring, frac));
     }
-    TriMesh {
-        positions,
-        triangles,
-    }
+    TriMesh { positions, triangles }
 }
 
 /// Flat eccentric annulus in z = 0: the unit disk minus the open disk |p − `center`| < `radius`.
@@ -138,14 +124,8 @@ pub fn eccentric_annulus(center: DVec2, radius: f64, rings: usize) -> TriMesh {
         radius > 0.0 && center.length() + radius < 1.0 && rings >= 1,
         "eccentric_annulus needs |center| + radius < 1"
     );
-    let outer = Curve::Circle {
-        c: DVec2::ZERO,
-        r: 1.0,
-    };
-    let holes = [Curve::Circle {
-        c: center,
-        r: radius,
-    }];
+    let outer = Curve::Circle { c: DVec2::ZERO, r: 1.0 };
+    let holes = [Curve::Circle { c: center, r: radius }];
     let (p, t) = planar_domain_with_holes(&outer, &holes, 1.0 / rings as f64, 0xECC0);
     lift(&p, t, |_| 0.0)
 }
@@ -154,8 +134,7 @@ pub fn eccentric_annulus(center: DVec2, radius: f64, rings: usize) -> TriMesh {
 // Part-like fixtures
 // ---------------------------------------------------------------------------------------------
 
-const PLATE_HOLES: [(f64, f64, f64); 3] =
-    [(-25.0, 10.0, 12.0), (20.0, 15.0, 8.0), (10.0, -20.0, 5.0)];
+const PLATE_HOLES: [(f64, f64, f64); 3] = [(-25.0, 10.0, 12.0), (20.0, 15.0, 8.0), (10.0, -20.0, 5.0)];
 
 /// Flat 100 × 80 mm plate (x ∈ [−50, 50], y ∈ [−40, 40], z = 0) with three circular holes of
 /// radii 12, 8 and 5 mm (boundary vertices exactly on the circles).
@@ -163,12 +142,7 @@ const PLATE_HOLES: [(f64, f64, f64); 3] =
 /// Delaunay mesh, edge length ≈ 2 mm, minimum angle above 20°, about 4 200 faces.
 /// Topology: 4 boundary loops, Euler characteristic −2.
 pub fn plate_3_holes() -> TriMesh {
-    let (p, t) = planar_domain_with_holes(
-        &rect(-50.0, -40.0, 50.0, 40.0),
-        &circles(&PLATE_HOLES),
-        2.0,
-        0x91A7E,
-    );
+    let (p, t) = planar_domain_with_holes(&rect(-50.0, -40.0, 50.0, 40.0), &circles(&PLATE_HOLES), 2.0, 0x91A7E);
     lift(&p, t, |_| 0.0)
 }
 
@@ -181,12 +155,7 @@ const SADDLE_C: f64 = 125.0;
 /// Height field over a Delaunay mesh, edge length ≈ 1.5 mm, about 6 300 faces, normals up.
 /// Topology: 3 boundary loops, Euler characteristic −1.
 pub fn saddle_2_holes() -> TriMesh {
-    let (p, t) = planar_domain_with_holes(
-        &rect(-40.0, -40.0, 40.0, 40.0),
-        &circles(&SADDLE_HOLES),
-        1.5,
-        0x5ADD1E,
-    );
+    let (p, t) = planar_domain_with_holes(&rect(-40.0, -40.0, 40.0, 40.0), &circles(&SADDLE_HOLES), 1.5, 0x5ADD1E);
     lift(&p, t, |q| (q.x * q.x - q.y * q.y) / (2.0 * SADDLE_C))
 }
 
@@ -201,43 +170,19 @@ const CAP_HOLE: [(f64, f64, f64); 1] = [(12.0, 8.0, 7.0)];
 /// Height field over a Delaunay mesh of the base disk, edge length ≈ 1.2 mm in projection, about
 /// 7 800 faces. Topology: 2 boundary loops, Euler characteristic 0.
 pub fn spherical_cap_hole() -> TriMesh {
-    let outer = Curve::Circle {
-        c: DVec2::ZERO,
-        r: CAP_BASE_R,
-    };
+    let outer = Curve::Circle { c: DVec2::ZERO, r: CAP_BASE_R };
     let (p, t) = planar_domain_with_holes(&outer, &circles(&CAP_HOLE), 1.2, 0xCA9);
     let z0 = (CAP_SPHERE_R * CAP_SPHERE_R - CAP_BASE_R * CAP_BASE_R).sqrt();
-    lift(&p, t, |q| {
-        (CAP_SPHERE_R * CAP_SPHERE_R - q.length_squared())
-            .max(0.0)
-            .sqrt()
-            - z0
-    })
+    lift(&p, t, |q| (CAP_SPHERE_R * CAP_SPHERE_R - q.length_squared()).max(0.0).sqrt() - z0)
 }
 
 /// The freeform panel's holes: two circles and two rotated ellipses.
 fn freeform_holes() -> [Curve; 4] {
     [
-        Curve::Circle {
-            c: DVec2::new(-38.0, -22.0),
-            r: 9.0,
-        },
-        Curve::Circle {
-            c: DVec2::new(-5.0, 25.0),
-            r: 5.0,
-        },
-        Curve::Ellipse {
-            c: DVec2::new(14.0, -18.0),
-            a: 14.0,
-            b: 6.0,
-            rot: 25f64.to_radians(),
-        },
-        Curve::Ellipse {
-            c: DVec2::new(40.0, 20.0),
-            a: 9.0,
-            b: 6.0,
-            rot: (-40f64).to_radians(),
-        },
+        Curve::Circle { c: DVec2::new(-38.0, -22.0), r: 9.0 },
+        Curve::Circle { c: DVec2::new(-5.0, 25.0), r: 5.0 },
+        Curve::Ellipse { c: DVec2::new(14.0, -18.0), a: 14.0, b: 6.0, rot: 25f64.to_radians() },
+        Curve::Ellipse { c: DVec2::new(40.0, 20.0), a: 9.0, b: 6.0, rot: (-40f64).to_radians() },
     ]
 }
 
@@ -257,12 +202,7 @@ fn freeform_height(q: DVec2) -> f64 {
 /// Height field over a Delaunay mesh, edge length ≈ 1.5 mm, about 10 000 faces, normals up.
 /// Topology: 5 boundary loops, Euler characteristic −3.
 pub fn freeform_4_holes() -> TriMesh {
-    let (p, t) = planar_domain_with_holes(
-        &rect(-60.0, -45.0, 60.0, 45.0),
-        &freeform_holes(),
-        1.5,
-        0xF4EE,
-    );
+    let (p, t) = planar_domain_with_holes(&rect(-60.0, -45.0, 60.0, 45.0), &freeform_holes(), 1.5, 0xF4EE);
     lift(&p, t, freeform_height)
 }
 
@@ -289,8 +229,7 @@ pub fn sliver_mesh() -> TriMesh {
         .flat_map(|j| {
             let xs = &xs;
             let y = ys[j];
-            xs.iter()
-                .map(move |&x| DVec3::new(x, y, -x * x / 400.0 + x * y / 500.0))
+            xs.iter().map(move |&x| DVec3::new(x, y, -x * x / 400.0 + x * y / 500.0))
         })
         .collect();
     let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
@@ -346,65 +285,34 @@ pub fn box_boss_pocket() -> TriMesh {
     };
     let mut b = QuadBuilder::default();
     let node = |i: usize, j: usize, z: i64| {
-        (
-            i,
-            j,
-            z,
-            DVec3::new(x0 + i as f64 * BOX_CELL, y0 + j as f64 * BOX_CELL, z as f64),
-        )
+        (i, j, z, DVec3::new(x0 + i as f64 * BOX_CELL, y0 + j as f64 * BOX_CELL, z as f64))
     };
     for j in 0..ny {
         for i in 0..nx {
             let z = height(i as isize, j as isize);
-            let q = [
-                node(i, j, z),
-                node(i + 1, j, z),
-                node(i + 1, j + 1, z),
-                node(i, j + 1, z),
-            ];
+            let q = [node(i, j, z), node(i + 1, j, z), node(i + 1, j + 1, z), node(i, j + 1, z)];
             b.quad(q, DVec3::Z);
-            let q = [
-                node(i, j, 0),
-                node(i + 1, j, 0),
-                node(i + 1, j + 1, 0),
-                node(i, j + 1, 0),
-            ];
+            let q = [node(i, j, 0), node(i + 1, j, 0), node(i + 1, j + 1, 0), node(i, j + 1, 0)];
             b.quad(q, DVec3::NEG_Z);
         }
     }
     // Walls on the vertical grid lines x = const, then on the horizontal ones y = const.
     for i in 0..=nx {
         for j in 0..ny {
-            let (hl, hr) = (
-                height(i as isize - 1, j as isize),
-                height(i as isize, j as isize),
-            );
+            let (hl, hr) = (height(i as isize - 1, j as isize), height(i as isize, j as isize));
             if hl != hr {
                 let (lo, hi) = (hl.min(hr), hl.max(hr));
-                let q = [
-                    node(i, j, lo),
-                    node(i, j + 1, lo),
-                    node(i, j + 1, hi),
-                    node(i, j, hi),
-                ];
+                let q = [node(i, j, lo), node(i, j + 1, lo), node(i, j + 1, hi), node(i, j, hi)];
                 b.quad(q, if hl > hr { DVec3::X } else { DVec3::NEG_X });
             }
         }
     }
     for j in 0..=ny {
         for i in 0..nx {
-            let (hb, ha) = (
-                height(i as isize, j as isize - 1),
-                height(i as isize, j as isize),
-            );
+            let (hb, ha) = (height(i as isize, j as isize - 1), height(i as isize, j as isize));
             if hb != ha {
                 let (lo, hi) = (hb.min(ha), hb.max(ha));
-                let q = [
-                    node(i, j, lo),
-                    node(i + 1, j, lo),
-                    node(i + 1, j, hi),
-                    node(i, j, hi),
-                ];
+                let q = [node(i, j, lo), node(i + 1, j, lo), node(i + 1, j, hi), node(i, j, hi)];
                 b.quad(q, if hb > ha { DVec3::Y } else { DVec3::NEG_Y });
             }
         }
@@ -513,10 +421,7 @@ pub fn sphere(radius: f64, subdivisions: usize) -> TriMesh {
         }
         tris = next;
     }
-    TriMesh {
-        positions: pos.into_iter().map(|p| p * radius).collect(),
-        triangles: tris,
-    }
+    TriMesh { positions: pos.into_iter().map(|p| p * radius).collect(), triangles: tris }
 }
 
 /// Open cylindrical tube of the given radius around the Z axis, z ∈ [0, height], outward normals
@@ -526,10 +431,7 @@ pub fn sphere(radius: f64, subdivisions: usize) -> TriMesh {
 /// estimates within 2 % use e.g. `cylinder(10.0, 20.0, 96, 36)`.
 /// Topology: 2 boundary loops, Euler characteristic 0.
 pub fn cylinder(radius: f64, height: f64, segments: usize, stacks: usize) -> TriMesh {
-    assert!(
-        segments >= 3 && stacks >= 1,
-        "cylinder needs segments >= 3, stacks >= 1"
-    );
+    assert!(segments >= 3 && stacks >= 1, "cylinder needs segments >= 3, stacks >= 1");
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     let mut prev: Option<(Vec<u32>, Vec<f64>)> = None;
@@ -545,62 +447,7 @@ pub fn cylinder(radius: f64, height: f64, segments: usize, stacks: usize) -> Tri
         }
         prev = Some((ring, frac));
     }
-    TriMesh {
-        positions,
-        triangles,
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// STL writers
-// ---------------------------------------------------------------------------------------------
-
-fn facet_normal(m: &TriMesh, t: &[u32; 3]) -> DVec3 {
-    let [a, b, c] = t.map(|i| m.positions[i as usize]);
-    (b - a).cross(c - a).normalize_or_zero()
-}
-
-/// Binary STL: 80-byte header (`header` truncated or zero-padded), u32 facet count, then per
-/// facet the unit normal computed from the triangle and its three corners as little-endian f32,
-/// and a zero attribute word. Length 84 + 50·F.
-pub fn to_binary_stl(mesh: &TriMesh, header: &str) -> Vec<u8> {
-    let mut out = Vec::with_capacity(84 + 50 * mesh.triangles.len());
-    let mut h = [0u8; 80];
-    let hb = header.as_bytes();
-    let n = hb.len().min(80);
-    h[..n].copy_from_slice(&hb[..n]);
-    out.extend_from_slice(&h);
-    out.extend_from_slice(&(mesh.triangles.len() as u32).to_le_bytes());
-    for t in &mesh.triangles {
-        let nrm = facet_normal(mesh, t);
-        let corners = t.map(|i| mesh.positions[i as usize]);
-        for v in std::iter::once(nrm).chain(corners) {
-            for c in [v.x, v.y, v.z] {
-                out.extend_from_slice(&(c as f32).to_le_bytes());
-            }
-        }
-        out.extend_from_slice(&[0, 0]);
-    }
-    out
-}
-
-/// ASCII STL (`solid name` … `endsolid name`), one `facet normal` / `outer loop` / three
-/// `vertex` lines per triangle; numbers are f32 printed with `{:e}`, which round-trips exactly.
-pub fn to_ascii_stl(mesh: &TriMesh, name: &str) -> String {
-    use std::fmt::Write;
-    let mut s = String::with_capacity(64 + 260 * mesh.triangles.len());
-    let f = |v: DVec3| format!("{:e} {:e} {:e}", v.x as f32, v.y as f32, v.z as f32);
-    let _ = writeln!(s, "solid {name}");
-    for t in &mesh.triangles {
-        let _ = writeln!(s, "  facet normal {}", f(facet_normal(mesh, t)));
-        s.push_str("    outer loop\n");
-        for i in t {
-            let _ = writeln!(s, "      vertex {}", f(mesh.positions[*i as usize]));
-        }
-        s.push_str("    endloop\n  endfacet\n");
-    }
-    let _ = writeln!(s, "endsolid {name}");
-    s
+    TriMesh { positions, triangles }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -632,12 +479,7 @@ impl SplitMix64 {
 
 /// Appends a ring of `n` vertices at angles 2π(j + offset)/n; returns their ids and angle
 /// fractions (j + offset)/n.
-fn push_ring(
-    positions: &mut Vec<DVec3>,
-    n: usize,
-    offset: f64,
-    at: impl Fn(f64) -> DVec3,
-) -> (Vec<u32>, Vec<f64>) {
+fn push_ring(positions: &mut Vec<DVec3>, n: usize, offset: f64, at: impl Fn(f64) -> DVec3) -> (Vec<u32>, Vec<f64>) {
     let mut ids = Vec::with_capacity(n);
     let mut frac = Vec::with_capacity(n);
     for j in 0..n {
@@ -695,37 +537,20 @@ fn compact(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> TriMesh {
             kept.push(p);
         }
     }
-    TriMesh {
-        positions: kept,
-        triangles: triangles
-            .into_iter()
-            .map(|t| t.map(|i| map[i as usize]))
-            .collect(),
-    }
+    TriMesh { positions: kept, triangles: triangles.into_iter().map(|t| t.map(|i| map[i as usize])).collect() }
 }
 
 /// Height field z = f(x, y) over a planar mesh (keeps counter-clockwise = normals up).
 fn lift(p: &[DVec2], triangles: Vec<[u32; 3]>, f: impl Fn(DVec2) -> f64) -> TriMesh {
-    TriMesh {
-        positions: p.iter().map(|&q| DVec3::new(q.x, q.y, f(q))).collect(),
-        triangles,
-    }
+    TriMesh { positions: p.iter().map(|&q| DVec3::new(q.x, q.y, f(q))).collect(), triangles }
 }
 
 fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Curve {
-    Curve::Rect {
-        min: DVec2::new(x0, y0),
-        max: DVec2::new(x1, y1),
-    }
+    Curve::Rect { min: DVec2::new(x0, y0), max: DVec2::new(x1, y1) }
 }
 
 fn circles(c: &[(f64, f64, f64)]) -> Vec<Curve> {
-    c.iter()
-        .map(|&(x, y, r)| Curve::Circle {
-            c: DVec2::new(x, y),
-            r,
-        })
-        .collect()
+    c.iter().map(|&(x, y, r)| Curve::Circle { c: DVec2::new(x, y), r }).collect()
 }
 
 /// A closed convex boundary curve of a planar domain.
@@ -789,9 +614,7 @@ impl Curve {
             Curve::Ellipse { c, a, b, rot } => {
                 // Equal arc length spacing through a fine cumulative-length table.
                 let m = 4096;
-                let at = |t: f64| {
-                    c + DVec2::from_angle(rot).rotate(DVec2::new(a * t.cos(), b * t.sin()))
-                };
+                let at = |t: f64| c + DVec2::from_angle(rot).rotate(DVec2::new(a * t.cos(), b * t.sin()));
                 let mut cum = vec![0.0; m + 1];
                 for k in 1..=m {
                     let (t0, t1) = (TAU * (k - 1) as f64 / m as f64, TAU * k as f64 / m as f64);
@@ -867,12 +690,7 @@ enum Label {
 /// band where lattice and boundary meet (projected minimum angle 23–28° on the fixtures).
 ///
 /// Output vertex order: outer loop, then each hole's loop, then interior vertices.
-fn planar_domain_with_holes(
-    outer: &Curve,
-    holes: &[Curve],
-    h: f64,
-    seed: u64,
-) -> (Vec<DVec2>, Vec<[u32; 3]>) {
+fn planar_domain_with_holes(outer: &Curve, holes: &[Curve], h: f64, seed: u64) -> (Vec<DVec2>, Vec<[u32; 3]>) {
     let mut rng = SplitMix64(seed);
     let (lo, hi, hx, hy) = match *outer {
         Curve::Rect { min, max } => {
@@ -889,26 +707,18 @@ fn planar_domain_with_holes(
         // A non-symmetric start keeps mirror-symmetric (co-circular) quadruples out.
         loops.push(hole.sample(h, hx, hy, 0.37));
     }
-    let segs: Vec<(DVec2, DVec2)> = loops
-        .iter()
-        .flat_map(|l| (0..l.len()).map(move |k| (l[k], l[(k + 1) % l.len()])))
-        .collect();
+    let segs: Vec<(DVec2, DVec2)> =
+        loops.iter().flat_map(|l| (0..l.len()).map(move |k| (l[k], l[(k + 1) % l.len()]))).collect();
     // Lattice points well inside the domain, with a tiny jitter against exact co-circularity.
     let mut interior = Vec::new();
-    let (nx, ny) = (
-        ((hi.x - lo.x) / hx).round() as i64,
-        ((hi.y - lo.y) / hy).round() as i64,
-    );
+    let (nx, ny) = (((hi.x - lo.x) / hx).round() as i64, ((hi.y - lo.y) / hy).round() as i64);
     for j in 0..=ny {
         for i in -1..=nx {
             let p = lo + DVec2::new((i as f64 + 0.5 * (j % 2) as f64) * hx, j as f64 * hy);
             if !outer.contains(p) || holes.iter().any(|c| c.contains(p)) {
                 continue;
             }
-            if segs
-                .iter()
-                .any(|&(a, b)| segment_distance(p, a, b) < 0.45 * h)
-            {
+            if segs.iter().any(|&(a, b)| segment_distance(p, a, b) < 0.45 * h) {
                 continue;
             }
             interior.push(p + 1e-3 * h * DVec2::new(rng.symmetric(), rng.symmetric()));
@@ -999,9 +809,7 @@ fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 /// > 0 when `d` is strictly inside the circumcircle of the counter-clockwise triangle a, b, c.
 fn incircle(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
     let (a, b, c) = (a - d, b - d, c - d);
-    a.length_squared() * b.perp_dot(c)
-        + b.length_squared() * c.perp_dot(a)
-        + c.length_squared() * a.perp_dot(b)
+    a.length_squared() * b.perp_dot(c) + b.length_squared() * c.perp_dot(a) + c.length_squared() * a.perp_dot(b)
 }
 
 /// Bowyer–Watson Delaunay triangulation of `pts` inserted in `order` (all of them), walking point
@@ -1041,11 +849,7 @@ fn delaunay(pts: &[DVec2], order: &[u32]) -> Vec<[u32; 3]> {
                     .find(|&k| {
                         alive[k]
                             && (0..3).all(|i| {
-                                orient(
-                                    p[tri[k][(i + 1) % 3] as usize],
-                                    p[tri[k][(i + 2) % 3] as usize],
-                                    q,
-                                ) >= 0.0
+                                orient(p[tri[k][(i + 1) % 3] as usize], p[tri[k][(i + 2) % 3] as usize], q) >= 0.0
                             })
                     })
                     .expect("delaunay: point outside the super triangle");
@@ -1085,10 +889,7 @@ fn delaunay(pts: &[DVec2], order: &[u32]) -> Vec<[u32; 3]> {
                 let n = nbr[t][i];
                 if n == NONE || mark[n as usize] != stamp {
                     let (a, b) = (tri[t][(i + 1) % 3], tri[t][(i + 2) % 3]);
-                    assert!(
-                        orient(p[a as usize], p[b as usize], q) > 0.0,
-                        "delaunay: cavity not star-shaped"
-                    );
+                    assert!(orient(p[a as usize], p[b as usize], q) > 0.0, "delaunay: cavity not star-shaped");
                     let id = tri.len();
                     tri.push([a, b, v]);
                     nbr.push([NONE, NONE, n]);
@@ -1110,10 +911,7 @@ fn delaunay(pts: &[DVec2], order: &[u32]) -> Vec<[u32; 3]> {
         }
         last = rim[0].3;
     }
-    (0..tri.len())
-        .filter(|&k| alive[k] && tri[k].iter().all(|&i| i < s))
-        .map(|k| tri[k])
-        .collect()
+    (0..tri.len()).filter(|&k| alive[k] && tri[k].iter().all(|&i| i < s)).map(|k| tri[k]).collect()
 }
 
 #[cfg(test)]
@@ -1138,10 +936,7 @@ mod tests {
                 used[i as usize] = true;
             }
             let [a, b, c] = t.map(|i| m.positions[i as usize]);
-            assert!(
-                (b - a).cross(c - a).length() > 0.0,
-                "{name}: face {f} has zero area"
-            );
+            assert!((b - a).cross(c - a).length() > 0.0, "{name}: face {f} has zero area");
             for k in 0..3 {
                 let e = (t[k], t[(k + 1) % 3]);
                 assert!(e.0 != e.1, "{name}: face {f} repeats a vertex");
@@ -1152,16 +947,9 @@ mod tests {
             }
         }
         assert!(used.iter().all(|&u| u), "{name}: unreferenced vertex");
-        let mut sorted: Vec<[u64; 3]> = m
-            .positions
-            .iter()
-            .map(|p| [p.x, p.y, p.z].map(|c| c.to_bits()))
-            .collect();
+        let mut sorted: Vec<[u64; 3]> = m.positions.iter().map(|p| [p.x, p.y, p.z].map(|c| c.to_bits())).collect();
         sorted.sort_unstable();
-        assert!(
-            sorted.windows(2).all(|w| w[0] != w[1]),
-            "{name}: duplicated position"
-        );
+        assert!(sorted.windows(2).all(|w| w[0] != w[1]), "{name}: duplicated position");
         let mut undirected = 0;
         let mut next: BTreeMap<u32, u32> = BTreeMap::new();
         for &(a, b) in directed.keys() {
@@ -1184,19 +972,13 @@ mod tests {
             seen.insert(start, ());
             let mut v = next[&start];
             while v != start {
-                assert!(
-                    seen.insert(v, ()).is_none(),
-                    "{name}: boundary not a set of cycles"
-                );
+                assert!(seen.insert(v, ()).is_none(), "{name}: boundary not a set of cycles");
                 l.push(v);
                 v = next[&v];
             }
             loops.push(l);
         }
-        Topo {
-            loops,
-            chi: nv as i64 - edges as i64 + m.triangles.len() as i64,
-        }
+        Topo { loops, chi: nv as i64 - edges as i64 + m.triangles.len() as i64 }
     }
 
     fn face_normal(m: &TriMesh, t: &[u32; 3]) -> DVec3 {
@@ -1241,11 +1023,7 @@ mod tests {
             let (loops, chi) = expected(name);
             assert_eq!(t.loops.len(), loops, "{name}: boundary loops");
             assert_eq!(t.chi, chi, "{name}: Euler characteristic");
-            assert!(
-                m.triangles.len() <= 20_000,
-                "{name}: {} faces",
-                m.triangles.len()
-            );
+            assert!(m.triangles.len() <= 20_000, "{name}: {} faces", m.triangles.len());
             if name != "box_boss_pocket" {
                 // Open surfaces face up, every face (so also the area-weighted mean).
                 let mut mean = DVec3::ZERO;
@@ -1261,12 +1039,7 @@ mod tests {
 
     #[test]
     fn flat_fixtures_are_flat_and_well_shaped() {
-        for name in [
-            "unit_disk",
-            "concentric_annulus",
-            "eccentric_annulus",
-            "plate_3_holes",
-        ] {
+        for name in ["unit_disk", "concentric_annulus", "eccentric_annulus", "plate_3_holes"] {
             let m = by_name(name).unwrap();
             assert!(m.positions.iter().all(|p| p.z == 0.0), "{name}");
             let a = min_angle_xy(&m);
@@ -1317,39 +1090,19 @@ mod tests {
 
     #[test]
     fn boundary_vertices_lie_on_the_analytic_curves() {
-        let unit = Curve::Circle {
-            c: DVec2::ZERO,
-            r: 1.0,
-        };
+        let unit = Curve::Circle { c: DVec2::ZERO, r: 1.0 };
         check_boundary_on("unit_disk", &unit_disk(24), &[unit]);
-        let inner = Curve::Circle {
-            c: DVec2::ZERO,
-            r: 0.4,
-        };
-        check_boundary_on(
-            "concentric_annulus",
-            &concentric_annulus(0.4, 16),
-            &[unit, inner],
-        );
-        let hole = Curve::Circle {
-            c: DVec2::new(0.3, 0.1),
-            r: 0.35,
-        };
-        check_boundary_on(
-            "eccentric_annulus",
-            &by_name("eccentric_annulus").unwrap(),
-            &[unit, hole],
-        );
+        let inner = Curve::Circle { c: DVec2::ZERO, r: 0.4 };
+        check_boundary_on("concentric_annulus", &concentric_annulus(0.4, 16), &[unit, inner]);
+        let hole = Curve::Circle { c: DVec2::new(0.3, 0.1), r: 0.35 };
+        check_boundary_on("eccentric_annulus", &by_name("eccentric_annulus").unwrap(), &[unit, hole]);
         let mut c = vec![rect(-50.0, -40.0, 50.0, 40.0)];
         c.extend(circles(&PLATE_HOLES));
         check_boundary_on("plate_3_holes", &plate_3_holes(), &c);
         let mut c = vec![rect(-40.0, -40.0, 40.0, 40.0)];
         c.extend(circles(&SADDLE_HOLES));
         check_boundary_on("saddle_2_holes", &saddle_2_holes(), &c);
-        let mut c = vec![Curve::Circle {
-            c: DVec2::ZERO,
-            r: CAP_BASE_R,
-        }];
+        let mut c = vec![Curve::Circle { c: DVec2::ZERO, r: CAP_BASE_R }];
         c.extend(circles(&CAP_HOLE));
         check_boundary_on("spherical_cap_hole", &spherical_cap_hole(), &c);
         let mut c = vec![rect(-60.0, -45.0, 60.0, 45.0)];
@@ -1363,8 +1116,7 @@ mod tests {
             let (mut lo, mut hi) = (f64::INFINITY, 0f64);
             for t in &m.triangles {
                 for k in 0..3 {
-                    let l = (m.positions[t[k] as usize] - m.positions[t[(k + 1) % 3] as usize])
-                        .length();
+                    let l = (m.positions[t[k] as usize] - m.positions[t[(k + 1) % 3] as usize]).length();
                     lo = lo.min(l);
                     hi = hi.max(l);
                 }
@@ -1374,14 +1126,8 @@ mod tests {
         let (a, b) = (unit_disk(12), unit_disk(24));
         assert_eq!(b.triangles.len(), 6 * 24 * 24);
         let (ea, eb) = (edge(&a), edge(&b));
-        assert!(
-            (ea.1 / eb.1 - 2.0).abs() < 0.1 && (ea.0 / eb.0 - 2.0).abs() < 0.1,
-            "{ea:?} {eb:?}"
-        );
-        let (ea, eb) = (
-            edge(&concentric_annulus(0.4, 8)),
-            edge(&concentric_annulus(0.4, 16)),
-        );
+        assert!((ea.1 / eb.1 - 2.0).abs() < 0.1 && (ea.0 / eb.0 - 2.0).abs() < 0.1, "{ea:?} {eb:?}");
+        let (ea, eb) = (edge(&concentric_annulus(0.4, 8)), edge(&concentric_annulus(0.4, 16)));
         assert!((ea.1 / eb.1 - 2.0).abs() < 0.2, "{ea:?} {eb:?}");
         for r in [12, 24, 48] {
             let m = eccentric_annulus(DVec2::new(0.3, 0.1), 0.35, r);
@@ -1403,37 +1149,18 @@ mod tests {
         for (inner, rings) in [(0.05, 3), (0.1, 10), (0.5, 1), (0.8, 20), (0.95, 4)] {
             let m = concentric_annulus(inner, rings);
             let t = topo("concentric_annulus", &m);
-            assert_eq!(
-                (t.loops.len(), t.chi),
-                (2, 0),
-                "concentric_annulus({inner}, {rings})"
-            );
+            assert_eq!((t.loops.len(), t.chi), (2, 0), "concentric_annulus({inner}, {rings})");
             // A hole much smaller than the layer width cannot have well-shaped triangles.
             if inner >= (1.0 - inner) / rings as f64 {
-                assert!(
-                    min_angle_xy(&m) > 20.0,
-                    "concentric_annulus({inner}, {rings})"
-                );
+                assert!(min_angle_xy(&m) > 20.0, "concentric_annulus({inner}, {rings})");
             }
         }
-        let cases = [
-            ((0.0, 0.0), 0.5, 16),
-            ((0.5, 0.0), 0.3, 32),
-            ((-0.2, 0.4), 0.2, 20),
-            ((0.1, -0.6), 0.25, 64),
-        ];
+        let cases = [((0.0, 0.0), 0.5, 16), ((0.5, 0.0), 0.3, 32), ((-0.2, 0.4), 0.2, 20), ((0.1, -0.6), 0.25, 64)];
         for ((x, y), r, rings) in cases {
             let m = eccentric_annulus(DVec2::new(x, y), r, rings);
             let t = topo("eccentric_annulus", &m);
-            assert_eq!(
-                (t.loops.len(), t.chi),
-                (2, 0),
-                "eccentric_annulus({x}, {y}, {r}, {rings})"
-            );
-            assert!(
-                min_angle_xy(&m) > 20.0,
-                "eccentric_annulus({x}, {y}, {r}, {rings})"
-            );
+            assert_eq!((t.loops.len(), t.chi), (2, 0), "eccentric_annulus({x}, {y}, {r}, {rings})");
+            assert!(min_angle_xy(&m) > 20.0, "eccentric_annulus({x}, {y}, {r}, {rings})");
         }
         for (s, (segments, stacks)) in [(0, (3, 1)), (1, (8, 3)), (2, (97, 10))] {
             let t = topo("sphere", &sphere(1.0, s));
@@ -1456,33 +1183,18 @@ mod tests {
         let close = |a: DVec3, b: DVec3| (a - b).abs().max_element() < 1e-9;
         assert!(close(bbox(&plate_3_holes()), DVec3::new(100.0, 80.0, 0.0)));
         let s = bbox(&saddle_2_holes());
-        assert!(
-            s.x == 80.0 && s.y == 80.0 && (10.0..15.0).contains(&s.z),
-            "{s}"
-        );
+        assert!(s.x == 80.0 && s.y == 80.0 && (10.0..15.0).contains(&s.z), "{s}");
         let s = bbox(&spherical_cap_hole());
-        assert!(
-            (s.x - 80.0).abs() < 1e-9 && (15.0..15.5).contains(&s.z),
-            "{s}"
-        );
+        assert!((s.x - 80.0).abs() < 1e-9 && (15.0..15.5).contains(&s.z), "{s}");
         let f = freeform_4_holes();
         let s = bbox(&f);
-        assert!(
-            s.x == 120.0 && s.y == 90.0 && (12.0..18.0).contains(&s.z),
-            "{s}"
-        );
+        assert!(s.x == 120.0 && s.y == 90.0 && (12.0..18.0).contains(&s.z), "{s}");
         for t in &f.triangles {
             let n = face_normal(&f, t).normalize();
             assert!(n.z > 45f64.to_radians().cos(), "freeform slope over 45°");
         }
-        assert!(close(
-            bbox(&sliver_mesh()).with_z(0.0),
-            DVec3::new(100.0, 60.0, 0.0)
-        ));
-        assert!(close(
-            bbox(&box_boss_pocket()),
-            DVec3::new(100.0, 80.0, 28.0)
-        ));
+        assert!(close(bbox(&sliver_mesh()).with_z(0.0), DVec3::new(100.0, 60.0, 0.0)));
+        assert!(close(bbox(&box_boss_pocket()), DVec3::new(100.0, 80.0, 28.0)));
     }
 
     #[test]
@@ -1502,13 +1214,8 @@ mod tests {
         let exact = 100.0 * 80.0 * 20.0 + 20.0 * 20.0 * 8.0 - 20.0 * 25.0 * 8.0;
         assert!(((vol - exact) / exact).abs() < 1e-9, "{vol} vs {exact}");
         // Top surface: boss top 400 mm², pocket floor 500 mm², base top 8000 − 900.
-        let up_area: f64 = m
-            .triangles
-            .iter()
-            .map(|t| face_normal(&m, t))
-            .filter(|n| n.z > 0.0)
-            .map(|n| n.length() / 2.0)
-            .sum();
+        let up_area: f64 =
+            m.triangles.iter().map(|t| face_normal(&m, t)).filter(|n| n.z > 0.0).map(|n| n.length() / 2.0).sum();
         assert!((up_area - 8000.0).abs() < 1e-9, "{up_area}");
     }
 
@@ -1535,10 +1242,7 @@ mod tests {
         assert_eq!(s.triangles.len(), 5120);
         let t = topo("sphere", &s);
         assert_eq!((t.loops.len(), t.chi), (0, 2));
-        assert!(s
-            .positions
-            .iter()
-            .all(|p| (p.length() - 25.0).abs() < 1e-12));
+        assert!(s.positions.iter().all(|p| (p.length() - 25.0).abs() < 1e-12));
         for tri in &s.triangles {
             let c = tri.iter().map(|&i| s.positions[i as usize]).sum::<DVec3>();
             assert!(face_normal(&s, tri).dot(c) > 0.0, "sphere face inward");
@@ -1546,34 +1250,25 @@ mod tests {
         let c = cylinder(10.0, 20.0, 96, 36);
         let t = topo("cylinder", &c);
         assert_eq!((t.loops.len(), t.chi), (2, 0));
-        assert!(c
-            .positions
-            .iter()
-            .all(|p| (p.truncate().length() - 10.0).abs() < 1e-12));
+        assert!(c.positions.iter().all(|p| (p.truncate().length() - 10.0).abs() < 1e-12));
         assert!(c.positions.iter().all(|p| (0.0..=20.0).contains(&p.z)));
         for tri in &c.triangles {
             let ctr = tri.iter().map(|&i| c.positions[i as usize]).sum::<DVec3>();
-            assert!(
-                face_normal(&c, tri).dot(ctr.with_z(0.0)) > 0.0,
-                "cylinder face inward"
-            );
+            assert!(face_normal(&c, tri).dot(ctr.with_z(0.0)) > 0.0, "cylinder face inward");
         }
     }
 
     #[test]
-    fn stl_writers_round_trip() {
+    fn fixtures_round_trip_through_the_stl_writers() {
         let m = plate_3_holes();
         let long = "x".repeat(100);
         for header in ["slitpath fixture", long.as_str()] {
-            let b = to_binary_stl(&m, header);
+            let b = crate::mesh::stl::write_binary(&m, header);
             assert_eq!(b.len(), 84 + 50 * m.triangles.len());
             let n = header.len().min(80);
             assert_eq!(&b[..n], &header.as_bytes()[..n]);
             assert!(b[n..80].iter().all(|&c| c == 0));
-            assert_eq!(
-                u32::from_le_bytes(b[80..84].try_into().unwrap()) as usize,
-                m.triangles.len()
-            );
+            assert_eq!(u32::from_le_bytes(b[80..84].try_into().unwrap()) as usize, m.triangles.len());
             let f = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
             for (k, t) in m.triangles.iter().enumerate() {
                 let base = 84 + 50 * k;
@@ -1582,15 +1277,12 @@ mod tests {
                 for (c, &i) in t.iter().enumerate() {
                     let p = m.positions[i as usize];
                     let o = base + 12 + 12 * c;
-                    assert_eq!(
-                        [f(o), f(o + 4), f(o + 8)],
-                        [p.x as f32, p.y as f32, p.z as f32]
-                    );
+                    assert_eq!([f(o), f(o + 4), f(o + 8)], [p.x as f32, p.y as f32, p.z as f32]);
                 }
             }
         }
         let m = unit_disk(4);
-        let s = to_ascii_stl(&m, "disk");
+        let s = crate::mesh::stl::write_ascii(&m, "disk");
         assert!(s.starts_with("solid disk\n") && s.trim_end().ends_with("endsolid disk"));
         assert_eq!(s.matches("facet normal").count(), m.triangles.len());
         assert_eq!(s.matches("endfacet").count(), m.triangles.len());
@@ -1613,13 +1305,9 @@ mod tests {
     fn generation_is_deterministic() {
         for &name in NAMES {
             let (a, b) = (by_name(name).unwrap(), by_name(name).unwrap());
-            assert_eq!(to_binary_stl(&a, name), to_binary_stl(&b, name), "{name}");
-            let bits = |m: &TriMesh| {
-                m.positions
-                    .iter()
-                    .flat_map(|p| p.to_array().map(f64::to_bits))
-                    .collect::<Vec<_>>()
-            };
+            assert_eq!(crate::mesh::stl::write_binary(&a, name), crate::mesh::stl::write_binary(&b, name), "{name}");
+            let bits =
+                |m: &TriMesh| m.positions.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
             assert_eq!(bits(&a), bits(&b), "{name}");
             assert_eq!(a.triangles, b.triangles, "{name}");
         }
@@ -1629,12 +1317,7 @@ mod tests {
     fn print_fixture_stats() {
         for &name in NAMES {
             let m = by_name(name).unwrap();
-            let (lo, hi) = m
-                .positions
-                .iter()
-                .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
-                    (lo.min(p.z), hi.max(p.z))
-                });
+            let (lo, hi) = m.positions.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.z), hi.max(p.z)));
             eprintln!(
                 "{name}: V {} F {} min angle(xy) {:.1} z [{lo:.2}, {hi:.2}]",
                 m.positions.len(),

@@ -336,7 +336,8 @@ fn curvature_of_a_fine_sphere_is_one_over_r() {
 fn curvature_of_a_cylinder_is_one_over_r_and_zero() {
     let r = 10.0;
     let m = fixtures::cylinder(r, 30.0, 128, 24);
-    let surface = mesh::geometry::build_surface(mesh::topology::Component { mesh: m.clone(), loops: Vec::new() }).unwrap();
+    let surface =
+        mesh::geometry::build_surface(mesh::topology::Component { mesh: m.clone(), loops: Vec::new() }).unwrap();
     // Along the axis the normal curvature vanishes; around it, 1/r.
     for c in &surface.curvature {
         assert!(c.normal_curvature(DVec3::Z).abs() < 0.02 / r);
@@ -348,7 +349,8 @@ fn curvature_of_a_cylinder_is_one_over_r_and_zero() {
 fn every_fixture_loads_with_its_topology() {
     for name in fixtures::NAMES {
         let m = fixtures::by_name(name).unwrap();
-        let out = mesh::load(&stl::write_binary(&m, name), &MeshOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let out =
+            mesh::load(&stl::write_binary(&m, name), &MeshOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
         let r = &out.report;
         assert_eq!(r.faces, m.triangles.len(), "{name}");
         assert_eq!(r.degenerate_faces_dropped + r.duplicate_faces_dropped + r.pinch_vertices_split, 0, "{name}");

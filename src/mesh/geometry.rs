@@ -56,11 +56,14 @@ pub fn build_surface(component: Component) -> Result<Surface, MeshError> {
         })
         .unzip();
     let vertex_normals = vertex_normals(&mesh.positions, &mesh.triangles, &face_normals);
+    // The fit differentiates normals along edges, so their O(h²) error becomes O(h) in the
+    // curvature: Max's weights, exact for vertices on a sphere, keep that error small.
+    let fit_normals = max_vertex_normals(&mesh.positions, &mesh.triangles);
     let curvature = mesh
         .triangles
         .iter()
         .zip(&face_normals)
-        .map(|(t, &n)| face_curvature(t.map(|v| mesh.positions[v as usize]), t.map(|v| vertex_normals[v as usize]), n))
+        .map(|(t, &n)| face_curvature(t.map(|v| mesh.positions[v as usize]), t.map(|v| fit_normals[v as usize]), n))
         .collect();
     Ok(Surface {
         positions: mesh.positions,
@@ -83,6 +86,21 @@ pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], face_normals:
             let e1 = positions[t[(k + 1) % 3] as usize] - p;
             let e2 = positions[t[(k + 2) % 3] as usize] - p;
             normals[t[k] as usize] += n * e1.angle_between(e2);
+        }
+    }
+    normals.iter().map(|n| n.normalize_or_zero()).collect()
+}
+
+/// Vertex normals with the weights of Max, "Weights for computing vertex normals from facet
+/// normals" (JGT 1999): `Σ (e1 × e2) / (|e1|² |e2|²)`, exact when the 1-ring lies on a sphere.
+pub fn max_vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::ZERO; positions.len()];
+    for t in triangles {
+        for k in 0..3 {
+            let p = positions[t[k] as usize];
+            let e1 = positions[t[(k + 1) % 3] as usize] - p;
+            let e2 = positions[t[(k + 2) % 3] as usize] - p;
+            normals[t[k] as usize] += e1.cross(e2) / (e1.length_squared() * e2.length_squared());
         }
     }
     normals.iter().map(|n| n.normalize_or_zero()).collect()

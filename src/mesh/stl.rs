@@ -182,6 +182,26 @@ pub fn write_binary(mesh: &TriMesh, header: &str) -> Vec<u8> {
     out
 }
 
+/// Writes an ASCII STL (`solid name` … `endsolid name`); numbers are f32 printed with `{:e}`,
+/// which round-trips exactly.
+pub fn write_ascii(mesh: &TriMesh, name: &str) -> String {
+    use std::fmt::Write;
+    let mut s = String::with_capacity(64 + 260 * mesh.triangles.len());
+    let f = |v: DVec3| format!("{:e} {:e} {:e}", v.x as f32, v.y as f32, v.z as f32);
+    let _ = writeln!(s, "solid {name}");
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let _ = writeln!(s, "  facet normal {}", f((b - a).cross(c - a).normalize_or_zero()));
+        s.push_str("    outer loop\n");
+        for p in [a, b, c] {
+            let _ = writeln!(s, "      vertex {}", f(p));
+        }
+        s.push_str("    endloop\n  endfacet\n");
+    }
+    let _ = writeln!(s, "endsolid {name}");
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
