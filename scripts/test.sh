@@ -12,6 +12,12 @@ if [ ! -t 1 ]; then bold="" green="" red="" reset=""; fi
 
 names=() results=() seconds=()
 
+# The bundled sample part, written by the CLI into www/public (copied into the page build).
+sample_part() {
+  mkdir -p www/public/samples
+  cargo run --release --quiet --bin slitpath -- fixture freeform_4_holes -o www/public/samples/freeform_4_holes.stl
+}
+
 # step NAME COMMAND...: runs the command in a subshell with `set -e` (so a multi-command
 # function stops at its first failure) and records the outcome. Never call it as the condition
 # of `if`, `&&` or `||`: bash ignores `set -e` inside such a call; test $? afterwards instead.
@@ -48,11 +54,11 @@ skip() {
 summary() {
   local passed=0 failed=0 i
   printf '\n%s━━━ summary ━━━%s\n' "$bold" "$reset"
-  printf '%-4s  %-44s  %6s\n' "" "step" "time"
+  printf '%-4s  %-52s  %6s\n' "" "step" "time"
   for i in "${!names[@]}"; do
     local colour=$green
     [ "${results[$i]}" = PASS ] || colour=$red
-    printf '%s%-4s%s  %-44s  %5ss\n' "$colour" "${results[$i]}" "$reset" "${names[$i]}" "${seconds[$i]}"
+    printf '%s%-4s%s  %-52s  %5ss\n' "$colour" "${results[$i]}" "$reset" "${names[$i]}" "${seconds[$i]}"
     if [ "${results[$i]}" = PASS ]; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
   done
   printf 'total time %ds\n' "$SECONDS"
@@ -63,7 +69,8 @@ summary() {
 step "set-up (scripts/setup.sh)" bash scripts/setup.sh
 if [ $? -ne 0 ]; then
   for s in "rustfmt" "clippy (native, all targets)" "clippy (wasm32 library)" "cargo test (native, release)" \
-    "wasm facade in headless Chromium" "wasm package for the page" "page type check (tsc)" "page build (vite)"; do
+    "wasm facade in headless Chromium" "wasm package for the page" "sample part (CLI: slitpath fixture)" \
+    "page type check (tsc)" "page build (vite)" "page in headless Chromium (sample, report, errors)"; do
     skip "$s" "the set-up failed"
   done
   summary
@@ -79,12 +86,22 @@ step "cargo test (native, release)" cargo test --release
 step "wasm facade in headless Chromium" wasm-pack test --headless --chrome --release -- --test wasm
 
 step "wasm package for the page" wasm-pack build --target web --out-dir www/pkg --release
-if [ $? -eq 0 ]; then
+wasm_ok=$?
+step "sample part (CLI: slitpath fixture)" sample_part
+sample_ok=$?
+if [ $wasm_ok -eq 0 ]; then
   step "page type check (tsc)" tsc --noEmit -p www
   step "page build (vite)" vite build www --logLevel warn
+  build_ok=$?
 else
   skip "page type check (tsc)" "the wasm package did not build"
   skip "page build (vite)" "the wasm package did not build"
+  build_ok=1
+fi
+if [ $build_ok -eq 0 ] && [ $sample_ok -eq 0 ]; then
+  step "page in headless Chromium (sample, report, errors)" node scripts/page-check.mjs
+else
+  skip "page in headless Chromium (sample, report, errors)" "the page or the sample part did not build"
 fi
 
 summary
