@@ -26,17 +26,18 @@ function loops(report: MeshReport): string {
 
 type Row = [label: string, value: string, note?: string | undefined];
 
-function rows(report: MeshReport): Row[] {
+/** `planned`: this is the surface the planner works on (notes about planning apply to it). */
+function rows(report: MeshReport, planned: boolean): Row[] {
   const [min, max] = report.bbox;
   const size: Vec3 = [max[0] - min[0], max[1] - min[1], max[2] - min[2]];
   const list: Row[] = [
     ["Vertices", integer.format(report.vertices)],
     ["Faces", integer.format(report.faces)],
     ["Edges", integer.format(report.edges)],
-    ["Components", integer.format(report.components), report.components > 1 ? "the largest is planned" : undefined],
+    ["Components", integer.format(report.components), planned && report.components > 1 ? "the largest is planned" : undefined],
     ["Boundary loops", loops(report)],
     ["Euler characteristic", integer.format(report.euler_characteristic)],
-    ["Genus", integer.format(report.genus), report.genus > 0 ? "only genus 0 can be planned yet" : undefined],
+    ["Genus", integer.format(report.genus), planned && report.genus > 0 ? "only genus 0 can be planned yet" : undefined],
     ["Closed", report.closed ? "yes (a solid)" : "no"],
     ["Degenerate faces dropped", integer.format(report.degenerate_faces_dropped)],
     ["Duplicate faces dropped", integer.format(report.duplicate_faces_dropped)],
@@ -50,12 +51,12 @@ function rows(report: MeshReport): Row[] {
   return list;
 }
 
-function table(report: MeshReport, caption: string, testId: string): HTMLTableElement {
+function table(report: MeshReport, planned: boolean, caption: string, testId: string): HTMLTableElement {
   const t = el("table", undefined, "report-table");
   t.dataset["testid"] = testId;
   t.append(el("caption", caption));
   const body = el("tbody");
-  for (const [label, value, note] of rows(report)) {
+  for (const [label, value, note] of rows(report, planned)) {
     const tr = el("tr");
     tr.append(el("th", label));
     const td = el("td", value);
@@ -69,10 +70,11 @@ function table(report: MeshReport, caption: string, testId: string): HTMLTableEl
 
 /** Replaces the container's content with the report of `name`. */
 export function renderReport(container: HTMLElement, report: MeshReport, name: string): void {
-  const parts: HTMLElement[] = [table(report, `Whole model — ${name}`, "report-model")];
+  const closed = report.machined !== undefined;
+  const parts: HTMLElement[] = [table(report, !closed, `Whole model — ${name}`, "report-model")];
   if (report.machined !== undefined) {
     const intro = el("p", "A closed solid: the surface to machine is its top, the faces within the wall angle of the tool axis. Steep walls of bosses and pockets become holes.", "explain");
-    parts.push(intro, table(report.machined, "Machined top surface", "report-machined"));
+    parts.push(intro, table(report.machined, true, "Machined top surface", "report-machined"));
   }
   container.replaceChildren(...parts);
 }
