@@ -243,3 +243,38 @@ fn report_keys_are_the_documented_ones() {
         assert!(keys.iter().any(|k| k == key), "missing `{key}` in {keys:?}");
     }
 }
+
+/// The facade reports exactly what the core computes, for every fixture, and the documented
+/// topology of two of them (plate with 3 holes; closed box with a boss and a pocket on top).
+#[wasm_bindgen_test]
+fn fixtures_report_what_the_core_computes() {
+    use slitpath::{fixtures, mesh};
+    for &name in fixtures::NAMES {
+        let stl = mesh::stl::write_binary(&fixtures::by_name(name).unwrap(), name);
+        let core = mesh::load(&stl, &mesh::MeshOptions::default()).expect(name).report;
+        let r = load(&stl, JsValue::UNDEFINED).expect(name).report().unwrap();
+        assert_eq!(num(&r, "faces"), core.faces as f64, "{name}");
+        assert_eq!(num(&r, "vertices"), core.vertices as f64, "{name}");
+        assert_eq!(num(&r, "boundary_loops"), core.boundary_loops as f64, "{name}");
+        assert_eq!(num(&r, "genus"), core.genus as f64, "{name}");
+        assert_eq!(flag(&r, "closed"), core.closed, "{name}");
+        assert_eq!(num(&r, "area_mm2"), core.area_mm2, "{name}");
+        assert_eq!(get(&r, "machined").is_object(), core.machined.is_some(), "{name}");
+    }
+
+    let stl = mesh::stl::write_binary(&fixtures::plate_3_holes(), "plate");
+    let r = load(&stl, JsValue::UNDEFINED).unwrap().report().unwrap();
+    assert_eq!(num(&r, "boundary_loops"), 4.0);
+    assert_eq!(num(&r, "genus"), 0.0);
+    assert_eq!(num(&r, "components"), 1.0);
+    assert!(!flag(&r, "closed"));
+
+    let stl = mesh::stl::write_binary(&fixtures::box_boss_pocket(), "box");
+    let r = load(&stl, JsValue::UNDEFINED).unwrap().report().unwrap();
+    assert!(flag(&r, "closed"));
+    assert_eq!(num(&r, "boundary_loops"), 0.0);
+    assert_eq!(num(&r, "euler_characteristic"), 2.0);
+    let top = get(&r, "machined");
+    assert!(top.is_object(), "a closed solid has a `machined` section");
+    assert!(!flag(&top, "closed"));
+}
