@@ -9,9 +9,15 @@
 //! |---|---|---|
 //! | STL → welded, validated surface | [`mesh`] | implemented |
 //! | analytic test surfaces | [`fixtures`] | implemented |
+//! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
+//! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
+//! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 
 pub mod fixtures;
+pub mod flatten;
+pub mod linalg;
 pub mod mesh;
+pub mod slitmap;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
