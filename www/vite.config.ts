@@ -1,0 +1,11 @@
+import { defineConfig } from "vite";
+
+// The page lives in www/; the wasm package is built into www/pkg by wasm-pack (--target web) and
+// imported by src/core.ts only. The planner runs in a module Web Worker.
+export default defineConfig({
+  base: "./",
+  worker: { format: "es" },
+  build: { outDir: "dist", emptyOutDir: true, target: "es2022" },
+  server: { host: "127.0.0.1", port: 5173, strictPort: true },
+  preview: { host: "127.0.0.1", port: 4173, strictPort: true },
+});
