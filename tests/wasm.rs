@@ -278,3 +278,57 @@ fn fixtures_report_what_the_core_computes() {
     assert!(top.is_object(), "a closed solid has a `machined` section");
     assert!(!flag(&top, "closed"));
 }
+
+/// The conformal core through the facade: the flattened domain and the slit map as typed arrays
+/// equal the native computation (same code, same input) within the cross-platform libm noise, and
+/// a pole in a hole gives the annulus map.
+#[wasm_bindgen_test]
+fn flattening_and_slit_map_cross_as_typed_arrays() {
+    use slitpath::{fixtures, mesh};
+    let part = fixtures::unit_disk(12);
+    let stl = mesh::stl::write_binary(&part, "disk");
+    let mut planner = load(&stl, JsValue::UNDEFINED).unwrap();
+    let n = planner.positions().len() / 3;
+    let uv = planner.flattened().unwrap();
+    assert_eq!(uv.len(), 2 * n);
+    assert_eq!(num(&planner.flatten_quality().unwrap(), "flipped_triangles"), 0.0);
+    // A flat disk flattens congruently, so the area-centred flattening is the disk itself up to a
+    // rotation: every boundary point at radius 1.
+    let w = planner.slit_map(0.0, 0.0).unwrap();
+    assert_eq!(w.len(), 2 * n);
+    assert!(w.chunks(2).all(|p| p[0].hypot(p[1]) <= 1.0 + 1e-9));
+    let info = planner.slit_map_info().unwrap();
+    assert_eq!(get(&info, "mode").as_string().unwrap(), "disk");
+
+    let stl = mesh::stl::write_binary(&fixtures::plate_3_holes(), "plate");
+    let mut planner = load(&stl, JsValue::UNDEFINED).unwrap();
+    let uv = planner.flattened().unwrap();
+    let surface = mesh::load(&stl, &Default::default()).unwrap().surface;
+    // A point inside hole 1: its vertex centroid (the holes are circles).
+    let hole = &surface.loops[1];
+    let (mut x, mut y) = (0.0, 0.0);
+    for &v in hole {
+        x += uv[2 * v as usize] / hole.len() as f64;
+        y += uv[2 * v as usize + 1] / hole.len() as f64;
+    }
+    let w = planner.slit_map(x, y).unwrap();
+    let info = planner.slit_map_info().unwrap();
+    assert_eq!(get(&info, "mode").as_string().unwrap(), "annulus");
+    let inner = num(&info, "innerRadius");
+    for &v in hole {
+        let r = w[2 * v as usize].hypot(w[2 * v as usize + 1]);
+        assert!((r - inner).abs() < 1e-9, "{r} vs {inner}");
+    }
+    assert_eq!(Array::from(&get(&info, "slits")).length(), 2);
+}
+
+#[wasm_bindgen_test]
+fn slit_map_with_a_bad_pole_throws() {
+    use slitpath::{fixtures, mesh};
+    let stl = mesh::stl::write_binary(&fixtures::plate_3_holes(), "plate");
+    let mut planner = load(&stl, JsValue::UNDEFINED).unwrap();
+    let err: js_sys::Error = JsValue::from(planner.slit_map(1e6, 0.0).unwrap_err()).dyn_into().unwrap();
+    assert!(String::from(err.message()).contains("outside"), "{}", String::from(err.message()));
+    let err: js_sys::Error = JsValue::from(planner.slit_map_info().unwrap_err()).dyn_into().unwrap();
+    assert!(String::from(err.message()).contains("no slit map"));
+}

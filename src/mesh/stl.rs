@@ -41,9 +41,12 @@ pub fn read(bytes: &[u8], max_triangles: usize) -> Result<TriMesh, MeshError> {
     })
 }
 
+/// Starts with `solid` and is text: a binary file whose header starts with `solid` has control
+/// bytes in its counts and floats, so a truncated one is still reported as a truncated binary.
 fn looks_ascii(bytes: &[u8]) -> bool {
     let start = bytes.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(0);
-    bytes[start..].len() >= 5 && bytes[start..start + 5].eq_ignore_ascii_case(b"solid")
+    let is_text = bytes.iter().all(|&b| b >= 0x20 && b != 0x7f || matches!(b, b'\t' | b'\n' | b'\r' | 0x0c));
+    bytes[start..].len() >= 5 && bytes[start..start + 5].eq_ignore_ascii_case(b"solid") && is_text
 }
 
 fn read_binary(bytes: &[u8], n: u64, max_triangles: usize) -> Result<TriMesh, MeshError> {
@@ -244,6 +247,10 @@ mod tests {
         let mut bytes = write_binary(&square(), "x");
         bytes.truncate(bytes.len() - 7);
         assert!(matches!(read(&bytes, 10), Err(MeshError::Truncated { triangles: 2, actual_bytes: 177, .. })));
+        // Regression (issue 2, found by the browser tests): a truncated binary whose header
+        // starts with `solid` is a truncated binary, not bad ASCII.
+        bytes[..5].copy_from_slice(b"solid");
+        assert!(matches!(read(&bytes, 10), Err(MeshError::Truncated { triangles: 2, .. })));
         let garbled = "solid s\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 zero\n";
         assert!(matches!(read(garbled.as_bytes(), 10), Err(MeshError::AsciiSyntax { line: 4, .. })));
         let nan = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex NaN 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid\n";

@@ -14,7 +14,9 @@ use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
+use crate::flatten::{self, FlattenInput, FlattenOptions, Flattening};
 use crate::mesh::{self, MeshOptions, MeshOutput};
+use crate::slitmap::{PlanarDomain, SlitMap, SlitMapOptions, SlitMapSolver};
 
 /// Installs the panic hook the first time any entry point runs.
 fn init() {
@@ -78,10 +80,27 @@ impl JsMeshOptions {
     }
 }
 
-/// One loaded part: the mesh stage's output, and later the planner's reusable solvers.
+/// One loaded part: the mesh stage's output and the reusable conformal solvers, built on first use.
 #[wasm_bindgen]
 pub struct Planner {
     output: MeshOutput,
+    conformal: Option<(Flattening, SlitMapSolver)>,
+    last_map: Option<SlitMap>,
+}
+
+fn js_err(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// What the page shows of a slit map besides the per-vertex image.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct SlitMapInfo<'a> {
+    mode: &'static str,
+    inner_radius: Option<f64>,
+    annulus_hole: Option<usize>,
+    slits: &'a [crate::slitmap::Slit],
+    flipped_triangles: usize,
 }
 
 #[wasm_bindgen]
@@ -94,7 +113,7 @@ impl Planner {
         init();
         let options = JsMeshOptions::parse(options)?;
         let output = mesh::load(stl, &options).map_err(|e| JsError::new(&e.to_string()))?;
-        Ok(Planner { output })
+        Ok(Planner { output, conformal: None, last_map: None })
     }
 
     /// The mesh report (the same object `slitpath info --json` prints).
@@ -111,5 +130,60 @@ impl Planner {
     /// Triangles of the surface to machine, flat vertex indices `[a0, b0, c0, a1, …]`.
     pub fn triangles(&self) -> Vec<u32> {
         self.output.surface.triangles.iter().flatten().copied().collect()
+    }
+
+    /// Flattened positions (BFF, seed 000 §2.1), flat `[u0, v0, u1, …]`, same vertex order.
+    /// Factorises once per part; throws for a surface that cannot be planned (closed, genus > 0).
+    pub fn flattened(&mut self) -> Result<Vec<f64>, JsError> {
+        Ok(self.conformal()?.0.uv.iter().flat_map(|p| p.to_array()).collect())
+    }
+
+    /// Quality figures of the flattening (flipped triangles, quasi-conformal distortion, area).
+    #[wasm_bindgen(js_name = flattenQuality)]
+    pub fn flatten_quality(&mut self) -> Result<JsValue, JsError> {
+        to_js(&self.conformal()?.0.quality)
+    }
+
+    /// The slit map for a pole `(x, y)` of the flattened plane: the image `w` per vertex, flat
+    /// `[re0, im0, re1, …]`. Reuses the factorisation: a new pole costs back-substitutions only.
+    #[wasm_bindgen(js_name = slitMap)]
+    pub fn slit_map(&mut self, x: f64, y: f64) -> Result<Vec<f64>, JsError> {
+        let map = self.conformal()?.1.map(glam::DVec2::new(x, y)).map_err(js_err)?;
+        let w = map.w.iter().flat_map(|p| p.to_array()).collect();
+        self.last_map = Some(map);
+        Ok(w)
+    }
+
+    /// Mode, inner radius, slits and flipped-triangle count of the last [`Planner::slit_map`].
+    #[wasm_bindgen(js_name = slitMapInfo)]
+    pub fn slit_map_info(&self) -> Result<JsValue, JsError> {
+        let map = self.last_map.as_ref().ok_or_else(|| JsError::new("no slit map computed yet: call slitMap(x, y)"))?;
+        let (mode, inner_radius, annulus_hole) = match map.mode {
+            crate::slitmap::Mode::Disk => ("disk", None, None),
+            crate::slitmap::Mode::Annulus { hole, inner_radius } => ("annulus", Some(inner_radius), Some(hole)),
+        };
+        to_js(&SlitMapInfo {
+            mode,
+            inner_radius,
+            annulus_hole,
+            slits: &map.slits,
+            flipped_triangles: map.flipped_triangles(),
+        })
+    }
+
+    fn conformal(&mut self) -> Result<&(Flattening, SlitMapSolver), JsError> {
+        if self.conformal.is_none() {
+            let surface = &self.output.surface;
+            surface.check_plannable().map_err(js_err)?;
+            let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(js_err)?;
+            let domain = PlanarDomain {
+                positions: flat.uv.clone(),
+                triangles: surface.triangles.clone(),
+                loops: surface.loops.clone(),
+            };
+            let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(js_err)?;
+            self.conformal = Some((flat, solver));
+        }
+        Ok(self.conformal.as_ref().expect("just built"))
     }
 }

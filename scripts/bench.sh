@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Benchmarks, native and wasm (headless Chromium), on the same cases (src/bench.rs): the mesh stage
+# on a 1-million-triangle STL and the conformal core (flatten + slit map) on the analytic parts
+# (natively also on ../shared/meshes when present). Prints figures; asserts nothing about time.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+export PATH="$HOME/.cargo/bin:$PATH"
+echo "=== native ==="
+cargo bench --bench mesh --bench conformal 2>&1 | grep -v -E '^\s*(Compiling|Finished|Running)'
+echo "=== wasm (headless Chromium) ==="
+wasm-pack test --headless --chrome --release -- --test wasm_bench -- --nocapture 2>&1 |
+  grep -v -E '^\s*(Compiling|Finished|Running|Blocking)|^\[INFO\]'

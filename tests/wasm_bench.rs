@@ -1,0 +1,35 @@
+//! The conformal benchmark in headless Chromium, the wasm twin of `cargo bench --bench conformal`
+//! (same cases from `slitpath::bench`). Run by `npm run bench`; not part of `npm test`.
+#![cfg(target_arch = "wasm32")]
+
+use slitpath::bench::{best_mesh, conformal_cases, format_mesh, format_row, mesh_sheet, run_conformal, TABLE_HEADER};
+use slitpath::mesh::stl;
+use wasm_bindgen_test::*;
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+#[wasm_bindgen_test]
+fn mesh_stage_in_the_browser() {
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    let bytes = stl::write_binary(&mesh_sheet(730), "bench sheet");
+    let best = best_mesh(&bytes, 3, &now).expect("valid mesh");
+    console_log!("wasm (headless Chromium), best of 3: {}", format_mesh(&best));
+}
+
+#[wasm_bindgen_test]
+fn conformal_core_in_the_browser() {
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    console_log!("conformal core, wasm (headless Chromium)\n{TABLE_HEADER}");
+    for (name, mesh) in conformal_cases() {
+        // Best of 3, as natively.
+        let best = (0..3)
+            .map(|_| run_conformal(&name, &mesh, &now).expect("plannable"))
+            .min_by(|a, b| {
+                (a.slitmap_pole_ms + a.flatten_factorise_ms).total_cmp(&(b.slitmap_pole_ms + b.flatten_factorise_ms))
+            })
+            .expect("three runs");
+        console_log!("{}", format_row(&best));
+    }
+}
