@@ -201,22 +201,10 @@ pub fn cotan_weights(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<(u32, u
     merge_sorted(half)
 }
 
-/// Same as [`cotan_weights`] for planar (2D) positions: the cross product's z component is
-/// signed, so a flipped triangle gives negative cotangents (which the solvers then reject
-/// only if the resulting matrix is indefinite).
+/// Same as [`cotan_weights`] for planar (2D) positions (the cotangent uses the unsigned area).
 pub fn cotan_weights_2d(positions: &[glam::DVec2], triangles: &[[u32; 3]]) -> Vec<(u32, u32, f64)> {
-    let mut half: Vec<(u32, u32, f64)> = Vec::with_capacity(triangles.len() * 3);
-    for t in triangles {
-        for k in 0..3 {
-            let (a, i, j) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            let pa = positions[a as usize];
-            let u = positions[i as usize] - pa;
-            let v = positions[j as usize] - pa;
-            let cot = u.dot(v) / u.perp_dot(v).abs();
-            half.push((i.min(j), i.max(j), 0.5 * cot));
-        }
-    }
-    merge_sorted(half)
+    let lifted: Vec<DVec3> = positions.iter().map(|p| p.extend(0.0)).collect();
+    cotan_weights(&lifted, triangles)
 }
 
 fn merge_sorted(mut half: Vec<(u32, u32, f64)>) -> Vec<(u32, u32, f64)> {
