@@ -137,11 +137,7 @@ pub fn run_conformal(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Resul
     let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(|e| e.to_string())?;
     let slitmap_factorise_ms = now() - t;
     // Poles: the centre of the largest triangle (inside the domain) and each hole.
-    let largest = (0..domain.triangles.len())
-        .max_by(|&a, &b| tri_area(&domain, a).total_cmp(&tri_area(&domain, b)))
-        .ok_or("no triangles")?;
-    let mut poles =
-        vec![domain.triangles[largest].iter().map(|&v| domain.positions[v as usize]).sum::<glam::DVec2>() / 3.0];
+    let mut poles = vec![domain.largest_face_centre()];
     poles.extend((1..domain.loops.len()).map(|h| solver.canonical_hole_pole(h)));
     let t = now();
     for &p in &poles {
@@ -159,11 +155,6 @@ pub fn run_conformal(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Resul
         slitmap_pole_ms,
         poles: poles.len(),
     })
-}
-
-fn tri_area(d: &PlanarDomain, f: usize) -> f64 {
-    let [a, b, c] = d.triangles[f].map(|v| d.positions[v as usize]);
-    0.5 * (b - a).perp_dot(c - a)
 }
 
 /// One table row.

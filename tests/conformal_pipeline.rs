@@ -2,7 +2,6 @@
 //! the invariants of the slit map hold for the centroid pole and for a pole in every hole.
 #![cfg(not(target_arch = "wasm32"))]
 
-use glam::DVec2;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions};
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::slitmap::{Mode, PlanarDomain, SlitMapOptions, SlitMapSolver};
@@ -31,15 +30,11 @@ fn slit_map_invariants_on_shared_meshes() {
         let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(flat.quality.flipped_triangles, 0, "{name}");
-        let domain =
-            PlanarDomain { positions: flat.uv, triangles: surface.triangles.clone(), loops: surface.loops.clone() };
+        let domain = PlanarDomain::of_surface(&surface, flat.uv);
         let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).unwrap();
-        // The pole in the domain: the centroid of the largest-area triangle's neighbourhood is
-        // robust for every shape; plus one pole per hole (the solver picks a deep point).
-        let largest =
-            (0..domain.triangles.len()).max_by(|&a, &b| area(&domain, a).total_cmp(&area(&domain, b))).unwrap();
-        let mut poles =
-            vec![domain.triangles[largest].iter().map(|&v| domain.positions[v as usize]).sum::<DVec2>() / 3.0];
+        // The pole in the domain: the centre of the largest triangle is inside for every shape;
+        // plus one pole per hole (the solver picks a deep point).
+        let mut poles = vec![domain.largest_face_centre()];
         for h in 1..domain.loops.len() {
             poles.push(solver.canonical_hole_pole(h));
         }
@@ -82,9 +77,4 @@ fn slit_map_invariants_on_shared_meshes() {
             }
         }
     }
-}
-
-fn area(d: &PlanarDomain, f: usize) -> f64 {
-    let [a, b, c] = d.triangles[f].map(|v| d.positions[v as usize]);
-    0.5 * (b - a).perp_dot(c - a)
 }

@@ -79,28 +79,29 @@ pub fn build_surface(component: Component) -> Result<Surface, MeshError> {
 /// Angle-weighted vertex normals (Thürmer & Wüthrich): independent of how a region is split
 /// into triangles.
 pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], face_normals: &[DVec3]) -> Vec<DVec3> {
-    let mut normals = vec![DVec3::ZERO; positions.len()];
-    for (t, &n) in triangles.iter().zip(face_normals) {
-        for k in 0..3 {
-            let p = positions[t[k] as usize];
-            let e1 = positions[t[(k + 1) % 3] as usize] - p;
-            let e2 = positions[t[(k + 2) % 3] as usize] - p;
-            normals[t[k] as usize] += n * e1.angle_between(e2);
-        }
-    }
-    normals.iter().map(|n| n.normalize_or_zero()).collect()
+    accumulate_corners(positions, triangles, |f, e1, e2| face_normals[f] * e1.angle_between(e2))
 }
 
 /// Vertex normals with the weights of Max, "Weights for computing vertex normals from facet
 /// normals" (JGT 1999): `Σ (e1 × e2) / (|e1|² |e2|²)`, exact when the 1-ring lies on a sphere.
 pub fn max_vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
+    accumulate_corners(positions, triangles, |_, e1, e2| e1.cross(e2) / (e1.length_squared() * e2.length_squared()))
+}
+
+/// Sums `corner(face, e1, e2)` over the corners of each vertex (e1, e2 the edges leaving it,
+/// counter-clockwise) and normalises.
+fn accumulate_corners(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    corner: impl Fn(usize, DVec3, DVec3) -> DVec3,
+) -> Vec<DVec3> {
     let mut normals = vec![DVec3::ZERO; positions.len()];
-    for t in triangles {
+    for (f, t) in triangles.iter().enumerate() {
         for k in 0..3 {
             let p = positions[t[k] as usize];
             let e1 = positions[t[(k + 1) % 3] as usize] - p;
             let e2 = positions[t[(k + 2) % 3] as usize] - p;
-            normals[t[k] as usize] += e1.cross(e2) / (e1.length_squared() * e2.length_squared());
+            normals[t[k] as usize] += corner(f, e1, e2);
         }
     }
     normals.iter().map(|n| n.normalize_or_zero()).collect()

@@ -202,9 +202,9 @@ pub fn from_triangles(mesh: &TriMesh, options: &MeshOptions) -> Result<MeshOutpu
         // A solid: machine what the tool sees (steep walls become holes).
         let top = extract::top_surface(&component.mesh, axis, options.wall_angle_deg)?;
         let top_topo = topology::analyse(&top, axis)?;
-        let (_, top_component) = topology::largest_component(&top_topo);
+        let (top_best, top_component) = topology::largest_component(&top_topo);
         // The report describes the surface that is planned: the largest top component.
-        let mut machined = topology::report(&topology::analyse(&top_component.mesh, axis)?);
+        let mut machined = topology::component_report(&top_topo, top_best);
         machined.faces_in_other_components = top.triangles.len() - top_component.mesh.triangles.len();
         report.machined = Some(Box::new(machined));
         component = top_component;

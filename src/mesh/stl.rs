@@ -17,8 +17,9 @@ pub fn read(bytes: &[u8], max_triangles: usize) -> Result<TriMesh, MeshError> {
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(MeshError::Empty);
     }
-    if bytes.len() >= HEADER + 4 {
-        let n = u32::from_le_bytes(bytes[HEADER..HEADER + 4].try_into().expect("4 bytes")) as u64;
+    // The count a binary file declares, if it is long enough to declare one.
+    let declared = bytes.get(HEADER..HEADER + 4).map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")) as u64);
+    if let Some(n) = declared {
         if (HEADER + 4) as u64 + RECORD as u64 * n == bytes.len() as u64 {
             return read_binary(bytes, n, max_triangles);
         }
@@ -26,14 +27,7 @@ pub fn read(bytes: &[u8], max_triangles: usize) -> Result<TriMesh, MeshError> {
     if looks_ascii(bytes) {
         return read_ascii(bytes, max_triangles);
     }
-    if bytes.len() < HEADER + 4 {
-        return Err(MeshError::Truncated {
-            triangles: 0,
-            expected_bytes: (HEADER + 4) as u64,
-            actual_bytes: bytes.len() as u64,
-        });
-    }
-    let n = u32::from_le_bytes(bytes[HEADER..HEADER + 4].try_into().expect("4 bytes")) as u64;
+    let n = declared.unwrap_or(0);
     Err(MeshError::Truncated {
         triangles: n,
         expected_bytes: (HEADER + 4) as u64 + RECORD as u64 * n,

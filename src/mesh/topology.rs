@@ -340,27 +340,47 @@ fn loop_length(positions: &[DVec3], l: &[u32]) -> f64 {
 
 /// Figures of the whole analysed mesh (the stage's report, without `machined`).
 pub fn report(topo: &Topology) -> MeshReport {
-    let (lo, hi) = weld::bounding_box(&topo.mesh.positions);
-    let mut loop_vertex_counts = Vec::new();
-    for c in &topo.components {
-        loop_vertex_counts.extend(c.loops.iter().map(|&l| topo.loops[l].len()));
+    let faces: Vec<usize> = (0..topo.mesh.triangles.len()).collect();
+    let components: Vec<&ComponentInfo> = topo.components.iter().collect();
+    figures(topo, &faces, &components)
+}
+
+/// The same figures for component `c` alone (its pinch splits and re-orientations included in
+/// the whole mesh's counts).
+pub fn component_report(topo: &Topology, c: usize) -> MeshReport {
+    let faces: Vec<usize> = (0..topo.mesh.triangles.len()).filter(|&f| topo.face_component[f] as usize == c).collect();
+    figures(topo, &faces, &[&topo.components[c]])
+}
+
+fn figures(topo: &Topology, faces: &[usize], components: &[&ComponentInfo]) -> MeshReport {
+    let mut used = vec![false; topo.mesh.positions.len()];
+    for &f in faces {
+        for v in topo.mesh.triangles[f] {
+            used[v as usize] = true;
+        }
     }
+    let positions: Vec<DVec3> = topo.mesh.positions.iter().zip(&used).filter(|(_, &u)| u).map(|(p, _)| *p).collect();
+    let (lo, hi) = weld::bounding_box(&positions);
+    let loop_vertex_counts: Vec<usize> =
+        components.iter().flat_map(|c| c.loops.iter().map(|&l| topo.loops[l].len())).collect();
+    let vertices: usize = components.iter().map(|c| c.vertices).sum();
+    let edges: usize = components.iter().map(|c| c.edges).sum();
     MeshReport {
-        vertices: topo.mesh.positions.len(),
-        faces: topo.mesh.triangles.len(),
-        edges: topo.edges,
-        components: topo.components.len(),
-        boundary_loops: topo.loops.len(),
+        vertices,
+        faces: faces.len(),
+        edges,
+        components: components.len(),
+        boundary_loops: loop_vertex_counts.len(),
         loop_vertex_counts,
-        euler_characteristic: topo.mesh.positions.len() as i64 - topo.edges as i64 + topo.mesh.triangles.len() as i64,
-        genus: topo.components.iter().map(ComponentInfo::genus).sum(),
-        closed: topo.loops.is_empty(),
+        euler_characteristic: vertices as i64 - edges as i64 + faces.len() as i64,
+        genus: components.iter().map(|c| c.genus()).sum(),
+        closed: components.iter().all(|c| c.closed()),
         degenerate_faces_dropped: 0,
         duplicate_faces_dropped: 0,
         pinch_vertices_split: topo.pinch_vertices_split,
         faces_reoriented: topo.faces_reoriented,
         faces_in_other_components: 0,
-        area_mm2: topo.components.iter().map(|c| c.area).sum(),
+        area_mm2: components.iter().map(|c| c.area).sum(),
         bbox: [lo.to_array(), hi.to_array()],
         machined: None,
     }

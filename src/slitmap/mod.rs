@@ -80,6 +80,22 @@ pub struct PlanarDomain {
 }
 
 impl PlanarDomain {
+    /// The flattened domain of a surface: its triangles and loops with the 2D positions `uv`
+    /// (one per surface vertex, e.g. [`crate::flatten::Flattening::uv`]).
+    pub fn of_surface(surface: &crate::mesh::Surface, uv: Vec<DVec2>) -> Self {
+        Self { positions: uv, triangles: surface.triangles.clone(), loops: surface.loops.clone() }
+    }
+
+    /// The centre of the largest triangle: a point well inside the domain, whatever its shape.
+    pub fn largest_face_centre(&self) -> DVec2 {
+        let area = |t: &[u32; 3]| {
+            let [a, b, c] = t.map(|v| self.positions[v as usize]);
+            (b - a).perp_dot(c - a)
+        };
+        let t = self.triangles.iter().max_by(|a, b| area(a).total_cmp(&area(b))).expect("a domain has triangles");
+        t.iter().map(|&v| self.positions[v as usize]).sum::<DVec2>() / 3.0
+    }
+
     /// Builds a domain from positions and counter-clockwise triangles, finding the boundary loops
     /// from the half-edges without a twin. Each loop runs with the domain on its left (outer
     /// counter-clockwise, holes clockwise) and starts at its smallest vertex index; the loop with

@@ -176,11 +176,7 @@ impl Planner {
             let surface = &self.output.surface;
             surface.check_plannable().map_err(js_err)?;
             let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(js_err)?;
-            let domain = PlanarDomain {
-                positions: flat.uv.clone(),
-                triangles: surface.triangles.clone(),
-                loops: surface.loops.clone(),
-            };
+            let domain = PlanarDomain::of_surface(surface, flat.uv.clone());
             let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(js_err)?;
             self.conformal = Some((flat, solver));
         }

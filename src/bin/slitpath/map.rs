@@ -5,7 +5,8 @@ use glam::{DVec2, DVec3};
 use serde::Serialize;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions, FlattenQuality};
 use slitpath::mesh::Surface;
-use slitpath::slitmap::{self, Mode, PlanarDomain, SlitMapOptions};
+use slitpath::slitmap::{self, InverseMap, Mode, PlanarDomain, SlitMapOptions};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Where the pole comes from.
@@ -73,13 +74,12 @@ pub fn run(surface: &Surface, pole: &PoleChoice) -> Result<MapResult, String> {
     let t = Instant::now();
     let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(|e| e.to_string())?;
     let t_flatten = t.elapsed().as_secs_f64() * 1e3;
-    let domain =
-        PlanarDomain { positions: flat.uv.clone(), triangles: surface.triangles.clone(), loops: surface.loops.clone() };
+    let domain = PlanarDomain::of_surface(surface, flat.uv.clone());
     let t = Instant::now();
     let solver = slitmap::SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(|e| e.to_string())?;
     let t_factorise = t.elapsed().as_secs_f64() * 1e3;
     let (pole_uv, pole_3d) = match pole {
-        PoleChoice::Centroid => centroid(&domain, surface),
+        PoleChoice::Centroid => centroid(&domain, surface, &solver),
         PoleChoice::Hole(n) => hole_point(&domain, surface, *n, &solver)?,
         PoleChoice::Point3d(p) => {
             let (face, bary) = nearest_on_surface(surface, *p);
@@ -129,7 +129,7 @@ pub fn run(surface: &Surface, pole: &PoleChoice) -> Result<MapResult, String> {
 
 /// Area centroid of the flattened domain; when it falls outside the outer loop (a crescent), the
 /// centroid of the triangle nearest to it. Returns the point and its 3D image.
-fn centroid(domain: &PlanarDomain, surface: &Surface) -> (DVec2, DVec3) {
+fn centroid(domain: &PlanarDomain, surface: &Surface, solver: &slitmap::SlitMapSolver) -> (DVec2, DVec3) {
     let mut area = 0.0;
     let mut c = DVec2::ZERO;
     for t in &domain.triangles {
@@ -139,16 +139,19 @@ fn centroid(domain: &PlanarDomain, surface: &Surface) -> (DVec2, DVec3) {
         c += (a + b + p) / 3.0 * ar;
     }
     let c = c / area;
-    if let Some((face, bary)) = locate(domain, c) {
-        let t = surface.triangles[face];
-        return (c, (0..3).map(|k| surface.positions[t[k] as usize] * bary[k]).sum());
-    }
-    if inside_polygon(domain, 0, c) {
-        // Inside a hole: a legitimate annulus pole; its 3D image is the hole's centroid.
-        let hole = (1..domain.loops.len()).find(|&h| inside_polygon(domain, h, c)).unwrap_or(1);
-        let l = &domain.loops[hole];
-        let p3 = l.iter().map(|&v| surface.positions[v as usize]).sum::<DVec3>() / l.len() as f64;
-        return (c, p3);
+    match solver.classify_pole(c) {
+        Ok(None) => {
+            let flat = InverseMap::new(&domain.positions, Arc::new(domain.triangles.clone()));
+            if let Some(location) = flat.locate(c) {
+                return (c, location.interpolate(&surface.positions));
+            }
+        }
+        Ok(Some(hole)) => {
+            // Inside a hole: a legitimate annulus pole; its 3D image is the hole's centroid.
+            let l = &domain.loops[hole];
+            return (c, l.iter().map(|&v| surface.positions[v as usize]).sum::<DVec3>() / l.len() as f64);
+        }
+        Err(_) => {}
     }
     let face = (0..domain.triangles.len())
         .min_by(|&a, &b| tri_centroid(domain, a).distance(c).total_cmp(&tri_centroid(domain, b).distance(c)))
@@ -187,29 +190,6 @@ fn hole_point(
         }
     }
     Err(format!("no interior point of hole {n} was found in the flattened plane"))
-}
-
-/// The face containing `p` in the flattened plane and its barycentric coordinates.
-fn locate(domain: &PlanarDomain, p: DVec2) -> Option<(usize, [f64; 3])> {
-    domain.triangles.iter().enumerate().find_map(|(f, t)| {
-        let [a, b, c] = t.map(|v| domain.positions[v as usize]);
-        let area = (b - a).perp_dot(c - a);
-        let l = [(b - p).perp_dot(c - p) / area, (c - p).perp_dot(a - p) / area, (a - p).perp_dot(b - p) / area];
-        l.iter().all(|&x| x >= -1e-12).then_some((f, l))
-    })
-}
-
-fn inside_polygon(domain: &PlanarDomain, l: usize, p: DVec2) -> bool {
-    let poly = &domain.loops[l];
-    let mut inside = false;
-    for i in 0..poly.len() {
-        let a = domain.positions[poly[i] as usize];
-        let b = domain.positions[poly[(i + 1) % poly.len()] as usize];
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            inside = !inside;
-        }
-    }
-    inside
 }
 
 /// Nearest point of the surface to `p`: (face, barycentric coordinates). Brute force, O(faces).

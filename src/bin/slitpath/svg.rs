@@ -50,7 +50,7 @@ pub fn draw(d: &SlitDrawing) -> String {
     }
     // Radial lines: arg w unwrapped per triangle relative to its first corner.
     for k in 0..SPOKES {
-        let level = -std::f64::consts::PI + TAU * (k as f64 + 0.5) / SPOKES as f64;
+        let level = spoke_angle(k);
         let mut segments = Vec::new();
         for t in d.triangles {
             let base = arg(d.w[t[0] as usize]);
@@ -82,34 +82,14 @@ pub fn draw(d: &SlitDrawing) -> String {
         polyline(&mut svg, t.iter().map(|&v| right(d.w[v as usize])), true, "#ddd", 0.3);
     }
     for &level in &levels {
-        let _ = writeln!(
-            svg,
-            r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#3b7dd8" stroke-width="0.8"/>"##,
-            c.x,
-            c.y,
-            level * 0.48 * SIZE
-        );
+        circle(&mut svg, c, level * 0.48 * SIZE, "#3b7dd8", 0.8);
     }
     for k in 0..SPOKES {
-        let a = -std::f64::consts::PI + TAU * (k as f64 + 0.5) / SPOKES as f64;
-        let dir = DVec2::from_angle(a);
+        let dir = DVec2::from_angle(spoke_angle(k));
         polyline(&mut svg, [right(dir * min_r), right(dir)].into_iter(), false, "#d8733b", 0.8);
     }
-    let _ = writeln!(
-        svg,
-        r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##,
-        c.x,
-        c.y,
-        0.48 * SIZE
-    );
-    if let Some(r) = d.inner_radius {
-        let _ = writeln!(
-            svg,
-            r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1.6"/>"##,
-            c.x,
-            c.y,
-            r * 0.48 * SIZE
-        );
+    for r in std::iter::once(1.0).chain(d.inner_radius) {
+        circle(&mut svg, c, r * 0.48 * SIZE, "#222", 1.6);
     }
     for &(r, start, end) in d.slits {
         let span = (end - start).rem_euclid(TAU);
@@ -120,6 +100,19 @@ pub fn draw(d: &SlitDrawing) -> String {
     label(&mut svg, 2.0 * MARGIN + SIZE, "slit domain S^S (slits in red)");
     svg.push_str("</svg>\n");
     svg
+}
+
+/// Angle of radial line `k`, away from the ±π cut.
+fn spoke_angle(k: usize) -> f64 {
+    -std::f64::consts::PI + TAU * (k as f64 + 0.5) / SPOKES as f64
+}
+
+fn circle(svg: &mut String, centre: DVec2, r: f64, colour: &str, width: f64) {
+    let _ = writeln!(
+        svg,
+        r#"<circle cx="{:.2}" cy="{:.2}" r="{r:.2}" fill="none" stroke="{colour}" stroke-width="{width}"/>"#,
+        centre.x, centre.y
+    );
 }
 
 fn arg(w: DVec2) -> f64 {
