@@ -18,6 +18,7 @@ pub mod fixtures;
 pub mod flatten;
 pub mod linalg;
 pub mod mesh;
+pub mod num;
 pub mod slitmap;
 
 #[cfg(target_arch = "wasm32")]

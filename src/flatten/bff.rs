@@ -6,6 +6,7 @@ use glam::{DVec2, DVec3};
 
 use super::{check, quality, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenOptions, Flattening};
 use crate::linalg::{cotan_weights, SparseCholesky};
+use crate::num;
 
 const NONE: u32 = u32::MAX;
 
@@ -59,7 +60,7 @@ impl BffSolver {
                 let p = input.positions[t[c] as usize];
                 let u = input.positions[t[(c + 1) % 3] as usize] - p;
                 let v = input.positions[t[(c + 2) % 3] as usize] - p;
-                angle_sum[t[c] as usize] += u.cross(v).length().atan2(u.dot(v));
+                angle_sum[t[c] as usize] += num::atan2(u.cross(v).length(), u.dot(v));
             }
         }
         let mut weights = cotan_weights(input.positions, input.triangles);
@@ -284,8 +285,8 @@ impl BffSolver {
             if j > 0 {
                 phi += kj;
             }
-            tangents.push(DVec2::new(phi.cos(), phi.sin()));
-            target_len.push((0.5 * (u[a] + u[b])).exp() * self.lengths[j]);
+            tangents.push(DVec2::new(num::cos(phi), num::sin(phi)));
+            target_len.push(num::exp(0.5 * (u[a] + u[b])) * self.lengths[j]);
         }
 
         // 3. Close the curve: minimise Σ (ℓ*−ℓ̃)²/ℓ subject to Σ ℓ* T = 0 (BFF §4.3).
@@ -545,7 +546,7 @@ fn fill_hole(
             if m > 0 {
                 phi += turn[m];
             }
-            DVec2::new(phi.cos(), phi.sin())
+            DVec2::new(num::cos(phi), num::sin(phi))
         })
         .collect();
     let intrinsic = close_polygon(&tangents, &len, &len).ok().and_then(|pts| {
@@ -580,7 +581,7 @@ fn fill_hole(
             let (a, pa) = (ids[(k + 1) % 3], corners[(k + 1) % 3]);
             let (b, pb) = (ids[(k + 2) % 3], corners[(k + 2) % 3]);
             let (e1, e2) = (pa - p, pb - p);
-            angle_sum[v as usize] += cross.atan2(e1.dot(e2));
+            angle_sum[v as usize] += num::atan2(cross, e1.dot(e2));
             weights.push((a.min(b), a.max(b), 0.5 * e1.dot(e2) / cross));
         }
     }

@@ -45,9 +45,9 @@ pub fn quality(positions: &[DVec3], triangles: &[[u32; 3]], loops: &[Vec<u32>], 
         per_face.push((a3, a2.abs()));
     }
     // log(area2D/area3D) after the global scaling: subtract log(Σa2/Σa3).
-    let shift = (a2_sum / a3_sum).ln();
+    let shift = crate::num::ln(a2_sum / a3_sum);
     let mut ad = AreaDistortion { min: f64::INFINITY, max: f64::NEG_INFINITY, mean: 0.0, std: 0.0 };
-    let logs: Vec<f64> = per_face.iter().map(|&(a3, a2)| (a2 / a3).ln() - shift).collect();
+    let logs: Vec<f64> = per_face.iter().map(|&(a3, a2)| crate::num::ln(a2 / a3) - shift).collect();
     for (&(a3, _), &l) in per_face.iter().zip(&logs) {
         ad.min = ad.min.min(l);
         ad.max = ad.max.max(l);

@@ -11,7 +11,7 @@ use glam::DVec3;
 /// Faces of an outward-oriented closed mesh whose normal is within `wall_angle_deg` of `axis`.
 pub fn top_surface(mesh: &TriMesh, axis: DVec3, wall_angle_deg: f64) -> Result<TriMesh, MeshError> {
     let axis = axis.normalize();
-    let cos_wall = wall_angle_deg.to_radians().cos();
+    let cos_wall = crate::num::cos(wall_angle_deg.to_radians());
     let faces: Vec<[u32; 3]> = mesh
         .triangles
         .iter()

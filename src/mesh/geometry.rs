@@ -38,8 +38,8 @@ impl FaceCurvature {
     pub fn principal(&self) -> (f64, f64, DVec3) {
         let mean = 0.5 * (self.e + self.g);
         let r = (0.25 * (self.e - self.g).powi(2) + self.f * self.f).sqrt();
-        let angle = 0.5 * (2.0 * self.f).atan2(self.e - self.g);
-        (mean + r, mean - r, self.u * angle.cos() + self.v * angle.sin())
+        let angle = 0.5 * crate::num::atan2(2.0 * self.f, self.e - self.g);
+        (mean + r, mean - r, self.u * crate::num::cos(angle) + self.v * crate::num::sin(angle))
     }
 }
 

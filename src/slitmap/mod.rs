@@ -64,6 +64,7 @@ mod inverse;
 pub use inverse::{InverseMap, Location};
 
 use crate::linalg::{cotan_laplacian_triplets, cotan_weights_2d, LinalgError, SparseCholesky};
+use crate::num;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
@@ -325,11 +326,11 @@ impl SlitMap {
             .iter()
             .map(|t| {
                 let w0 = self.w[t[0] as usize];
-                let a0 = w0.y.atan2(w0.x);
+                let a0 = num::arg(w0);
                 let mut out = [DVec2::new(a0, w0.length()); 3];
                 for k in 1..3 {
                     let wk = self.w[t[k] as usize];
-                    let ak = wk.y.atan2(wk.x);
+                    let ak = num::arg(wk);
                     out[k] = DVec2::new(a0 + wrap_pi(ak - a0), wk.length());
                 }
                 out
@@ -563,7 +564,7 @@ impl SlitMapSolver {
         let mut h = vec![0.0; n];
         for (v, hv) in h.iter_mut().enumerate() {
             if self.on_boundary[v] {
-                *hv = -(self.positions[v] - solve_pole).length().ln();
+                *hv = -num::ln((self.positions[v] - solve_pole).length());
             }
         }
         // Right-hand side −Pᵀ L g, from the edges touching the boundary only.
@@ -610,9 +611,9 @@ impl SlitMapSolver {
         let mut w: Vec<DVec2> = (0..n)
             .map(|v| {
                 let theta = self.theta_unknown[v].map_or(0.0, |a| y[a]);
-                let r = h[v].exp();
+                let r = num::exp(h[v]);
                 let zp = self.positions[v] - solve_pole;
-                zp.rotate(DVec2::new(theta.cos(), theta.sin())) * r
+                zp.rotate(DVec2::new(num::cos(theta), num::sin(theta))) * r
             })
             .collect();
         let w0 = w[self.loops[0][0] as usize];
@@ -626,13 +627,13 @@ impl SlitMapSolver {
 
         let mode = match region {
             None => Mode::Disk,
-            Some(j) => Mode::Annulus { hole: j, inner_radius: hole_log_radius[j - 1].exp() },
+            Some(j) => Mode::Annulus { hole: j, inner_radius: num::exp(hole_log_radius[j - 1]) },
         };
         let slits = (1..self.loops.len())
             .filter(|&li| Some(li) != region)
             .map(|li| {
                 let (theta_start, theta_end) = angular_extent(&w, &self.loops[li]);
-                Slit { hole: li, radius: hole_log_radius[li - 1].exp(), theta_start, theta_end }
+                Slit { hole: li, radius: num::exp(hole_log_radius[li - 1]), theta_start, theta_end }
             })
             .collect();
         let pole_face = if region.is_none() { self.face_containing(pole) } else { None };
@@ -769,7 +770,7 @@ fn angular_extent(w: &[DVec2], lp: &[u32]) -> (f64, f64) {
     let mut ang: Vec<f64> = lp
         .iter()
         .map(|&v| {
-            let a = w[v as usize].y.atan2(w[v as usize].x);
+            let a = num::arg(w[v as usize]);
             if a >= PI {
                 a - TAU
             } else {

@@ -1,0 +1,78 @@
+//! Deterministic transcendental functions.
+//!
+//! The page (wasm) and the CLI (native) must write byte-identical G-code for the same part and
+//! options. `+ − × ÷` and `sqrt` are exact IEEE operations on every target, but the `f64` methods
+//! `exp`, `ln`, `sin`, … call the platform's libm natively (glibc) and a Rust port of musl's in
+//! wasm, which may differ in the last bit. Every stage calls these wrappers instead: one pure-Rust
+//! implementation (the `libm` crate) on every target.
+
+#[inline]
+pub fn exp(x: f64) -> f64 {
+    libm::exp(x)
+}
+#[inline]
+pub fn ln(x: f64) -> f64 {
+    libm::log(x)
+}
+#[inline]
+pub fn sin(x: f64) -> f64 {
+    libm::sin(x)
+}
+#[inline]
+pub fn cos(x: f64) -> f64 {
+    libm::cos(x)
+}
+/// `(sin x, cos x)`.
+#[inline]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    libm::sincos(x)
+}
+#[inline]
+pub fn tan(x: f64) -> f64 {
+    libm::tan(x)
+}
+#[inline]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    libm::atan2(y, x)
+}
+#[inline]
+pub fn acos(x: f64) -> f64 {
+    libm::acos(x)
+}
+#[inline]
+pub fn asin(x: f64) -> f64 {
+    libm::asin(x)
+}
+#[inline]
+pub fn powf(x: f64, y: f64) -> f64 {
+    libm::pow(x, y)
+}
+#[inline]
+pub fn hypot(x: f64, y: f64) -> f64 {
+    libm::hypot(x, y)
+}
+/// `atan2(v.y, v.x)`: the argument of a complex number stored as a `DVec2`.
+#[inline]
+pub fn arg(v: glam::DVec2) -> f64 {
+    libm::atan2(v.y, v.x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn agrees_with_std_to_an_ulp_or_two() {
+        for k in 0..1000 {
+            let x = -20.0 + 40.0 * k as f64 / 999.0;
+            let close = |a: f64, b: f64| (a - b).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs()).max(1e-300);
+            assert!(close(exp(x), x.exp()), "exp({x})");
+            assert!(close(sin(x), x.sin()) || (sin(x) - x.sin()).abs() < 1e-15, "sin({x})");
+            assert!(close(cos(x), x.cos()) || (cos(x) - x.cos()).abs() < 1e-15, "cos({x})");
+            assert!(close(atan2(x, 1.5), x.atan2(1.5)), "atan2({x})");
+            if x > 0.0 {
+                assert!(close(ln(x), x.ln()) || (ln(x) - x.ln()).abs() < 1e-15, "ln({x})");
+            }
+        }
+    }
+}
