@@ -11,7 +11,10 @@
 //! | analytic test surfaces | [`fixtures`] | implemented |
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
+//! | ring radii with the scallop height under control | [`spacing`] | implemented |
+//! | rings bridged into one spiral around the holes | [`spiral`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
+//! | deterministic transcendental functions | [`num`] | implemented |
 
 pub mod bench;
 pub mod fixtures;
@@ -20,6 +23,8 @@ pub mod linalg;
 pub mod mesh;
 pub mod num;
 pub mod slitmap;
+pub mod spacing;
+pub mod spiral;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;

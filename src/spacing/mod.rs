@@ -1,0 +1,538 @@
+//! Stage 5 — `spacing`: the radii of the iso-parametric rings |w| = R_k that keep the scallop
+//! height under the user's limit everywhere (seed 000 §2.2.1, eqs. 1–4, Pseudocode A-1).
+//!
+//! # What it computes
+//! Rings are circles |w| = R_1 > R_2 > … of the slit domain; on the surface they are the
+//! cutter-contact curves C_k = ω_SF⁻¹(C_k^S), and the ball centres run along C_k^T = C_k + R·n.
+//! A point of the iso-scallop surface S^h (the surface offset by h along its normal) is cut when
+//! it lies within R of a ball centre; then the material left above the surface there is at most
+//! h (seed eq. 1). Rings are found from the outside in, each as the smallest radius whose band
+//! [R_{k+1}, R_k] is still entirely cut by rings k and k+1 (a bisection, as in seed A-1).
+//!
+//! Where seed A-1 tests a cloud of S^h samples, this stage tests the *cusp* of each meridian
+//! exactly: along a meridian arg w = θ (orthogonal to the rings on the surface, the map being
+//! conformal) the distance to ring k grows and the distance to ring k+1 shrinks, so the worst
+//! point of the band is where the two are equal; it is found by root finding (regula falsi) on
+//! the meridian instead of being hoped for among samples, which is what lets the verifier's
+//! fresh samples agree with the promise. Meridians are spaced `meridian_spacing_mm` apart along
+//! the ring (plus extra ones at every slit tip); a meridian that crosses a hole's slit splits:
+//! the part above the hole must be cut by ring k, the part below by ring k+1.
+//!
+//! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
+//! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
+//! in annulus mode the last ring is the inner circle |w| = R_A itself (the spiral ends on it).
+//!
+//! # Preconditions
+//! A slit map of the surface (same vertices), ball radius R > 0, 0 < h < R.
+//!
+//! # Invariants of the output
+//! Radii strictly decreasing in (R_min, 1) (annulus: the last one equals R_A), none within the
+//! polygonal sag of a slit radius (so a ring never runs through a slit), and every meridian
+//! cusp tested at most R from a ball centre on S^{h·target_fraction}.
+
+mod lift;
+
+pub use lift::{Lift, Lifted};
+
+use crate::mesh::Surface;
+use crate::slitmap::{Mode, SlitMap};
+use glam::DVec3;
+use serde::Serialize;
+use std::f64::consts::TAU;
+
+/// Options of the spacing stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpacingOptions {
+    /// Ball radius R, mm. Default 3.
+    pub radius_mm: f64,
+    /// The scallop-height limit h, mm. Default 0.02.
+    pub scallop_mm: f64,
+    /// Rings are spaced for a cusp of `target_fraction · h`: the margin covers what lies between
+    /// meridians and the chordal sampling of the path. Default 0.97.
+    pub target_fraction: f64,
+    /// Meridians tested per ring are this far apart along the ring, mm. `None`: R / 2.
+    pub meridian_spacing_mm: Option<f64>,
+    /// The bisection of a ring radius stops when its bracket is below this fraction of the ring
+    /// step. Default 2e-3.
+    pub step_tolerance: f64,
+    /// More rings than this is an error (the options are surely wrong). Default 20 000.
+    pub max_rings: usize,
+}
+
+impl Default for SpacingOptions {
+    fn default() -> Self {
+        Self {
+            radius_mm: 3.0,
+            scallop_mm: 0.02,
+            target_fraction: 0.97,
+            meridian_spacing_mm: None,
+            step_tolerance: 2e-3,
+            max_rings: 20_000,
+        }
+    }
+}
+
+/// Errors of the spacing stage.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpacingError {
+    #[error("invalid spacing option: {0}")]
+    InvalidOption(String),
+    #[error("the slit map has {map} vertices but the surface {surface}: they must come from the same mesh")]
+    MeshMismatch { map: usize, surface: usize },
+    #[error("the ball (radius {radius_mm} mm) cuts the whole part from its centre: choose a smaller tool")]
+    ToolLargerThanPart { radius_mm: f64 },
+    #[error("no ring radius below {radius} covers the next band (ring {ring}): the surface cannot be cut with this ball here")]
+    NoProgress { ring: usize, radius: f64 },
+    #[error("more than {max} rings are needed: the scallop height is too small for this part and tool")]
+    TooManyRings { max: usize },
+    #[error("the slit domain point at radius {rho}, angle {theta} does not lie on the surface")]
+    Lift { rho: f64, theta: f64 },
+}
+
+/// One ring of the plan.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Ring {
+    /// |w| of the ring.
+    pub radius: f64,
+    /// Length of its cutter-contact curve on the surface, mm (sampled, for bridging and reports).
+    pub length_mm: f64,
+}
+
+/// The rings, outermost first.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Rings {
+    pub rings: Vec<Ring>,
+    pub mode: Mode,
+    /// 0 (disk) or the annulus inner radius R_A.
+    pub r_min: f64,
+    /// The scallop height the rings were spaced for, mm (`target_fraction · h`).
+    pub planned_scallop_mm: f64,
+    /// Meridians tested, summed over rings.
+    pub meridians: usize,
+    /// Radii tried by the bisections.
+    pub trials: usize,
+    /// Rings moved below a P1 fold at a slit tip although the band above was not proven cut
+    /// there (the alternative, a ring through the fold, could jump across the hole).
+    pub fold_compromises: usize,
+}
+
+impl Rings {
+    pub fn radii(&self) -> Vec<f64> {
+        self.rings.iter().map(|r| r.radius).collect()
+    }
+}
+
+/// A slit as the spacing needs it: radius, angular range and how far its polygonal sides sag.
+#[derive(Debug, Clone, Copy)]
+struct SlitBand {
+    radius: f64,
+    theta_start: f64,
+    extent: f64,
+    /// Radii within this distance of `radius` are on the slit itself (rounding).
+    sag: f64,
+}
+
+impl SlitBand {
+    fn contains(&self, theta: f64) -> bool {
+        (theta - self.theta_start).rem_euclid(TAU) <= self.extent
+    }
+}
+
+/// Ball centres near one meridian angle on one ring: a short chain of capsule axes.
+type Chain = [DVec3; 5];
+
+/// One-off entry: the ring radii for `map` on `surface`.
+pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Result<Rings, SpacingError> {
+    check_options(options)?;
+    if map.w.len() != surface.positions.len() {
+        return Err(SpacingError::MeshMismatch { map: map.w.len(), surface: surface.positions.len() });
+    }
+    Spacer::new(surface, map, options).run()
+}
+
+fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
+    let bad = |m: String| Err(SpacingError::InvalidOption(m));
+    if !(o.radius_mm.is_finite() && o.radius_mm > 0.0) {
+        return bad(format!("ball radius {} mm must be a positive number", o.radius_mm));
+    }
+    if !(o.scallop_mm.is_finite() && o.scallop_mm > 0.0) {
+        return bad(format!("scallop height {} mm must be a positive number", o.scallop_mm));
+    }
+    if o.scallop_mm >= o.radius_mm {
+        return bad(format!("scallop height {} mm must be smaller than the ball radius {} mm", o.scallop_mm, o.radius_mm));
+    }
+    if !(o.target_fraction > 0.0 && o.target_fraction <= 1.0) {
+        return bad(format!("target fraction {} must be in (0, 1]", o.target_fraction));
+    }
+    if let Some(m) = o.meridian_spacing_mm {
+        if !(m.is_finite() && m > 0.0) {
+            return bad(format!("meridian spacing {m} mm must be a positive number"));
+        }
+    }
+    if !(o.step_tolerance > 0.0 && o.step_tolerance < 0.5) {
+        return bad(format!("step tolerance {} must be in (0, 0.5)", o.step_tolerance));
+    }
+    Ok(())
+}
+
+struct Spacer<'a> {
+    lift: Lift<'a>,
+    slits: Vec<SlitBand>,
+    mode: Mode,
+    r_min: f64,
+    ball: f64,
+    h: f64,
+    meridian_mm: f64,
+    /// Radial intervals no ring may run in: the radius ranges of flipped image triangles (P1
+    /// folds at slit tips), where the inverse map is not one-to-one and a ring would jump.
+    forbidden: Vec<(f64, f64)>,
+    options: SpacingOptions,
+    trials: usize,
+    meridians: usize,
+    fold_compromises: usize,
+}
+
+/// The band above a candidate ring: the meridians tested and ring k's centres near each.
+struct Band {
+    /// Radius of ring k (1 for the outer boundary).
+    hi: f64,
+    thetas: Vec<f64>,
+    /// Ring k's chain per meridian; `None` for the first ring (nothing cut above it).
+    upper: Option<Vec<Chain>>,
+    /// Index of the meridian that failed last: tested first next time.
+    last_fail: usize,
+}
+
+impl<'a> Spacer<'a> {
+    fn new(surface: &'a Surface, map: &SlitMap, options: &SpacingOptions) -> Self {
+        // In the log-polar strip the two sides of a slit are exactly on its line (see `lift`):
+        // only radii within rounding of the slit radius are ambiguous.
+        let slits = map
+            .slits
+            .iter()
+            .map(|s| SlitBand { radius: s.radius, theta_start: s.theta_start, extent: s.extent(), sag: 1e-9 * s.radius.max(1e-3) })
+            .collect();
+        let r_min = match map.mode {
+            Mode::Disk => 0.0,
+            Mode::Annulus { inner_radius, .. } => inner_radius,
+        };
+        let mut forbidden: Vec<(f64, f64)> = map
+            .flipped_faces()
+            .into_iter()
+            .map(|f| {
+                let r = map.triangles()[f].map(|v| map.w[v as usize].length());
+                let (lo, hi) = (r[0].min(r[1]).min(r[2]), r[0].max(r[1]).max(r[2]));
+                let pad = 0.5 * (hi - lo) + 1e-9;
+                (lo - pad, hi + pad)
+            })
+            .collect();
+        forbidden.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut merged: Vec<(f64, f64)> = Vec::new();
+        for (lo, hi) in forbidden {
+            match merged.last_mut() {
+                Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+                _ => merged.push((lo, hi)),
+            }
+        }
+        Self {
+            lift: Lift::new(surface, map),
+            forbidden: merged,
+            slits,
+            mode: map.mode,
+            r_min,
+            ball: options.radius_mm,
+            h: options.scallop_mm * options.target_fraction,
+            meridian_mm: options.meridian_spacing_mm.unwrap_or(0.5 * options.radius_mm),
+            options: options.clone(),
+            trials: 0,
+            meridians: 0,
+            fold_compromises: 0,
+        }
+    }
+
+    fn run(mut self) -> Result<Rings, SpacingError> {
+        let mut rings: Vec<Ring> = Vec::new();
+        let mut last_step: Option<f64> = None;
+        loop {
+            let hi = rings.last().map_or(1.0, |r| r.radius);
+            let (mut band, hi_length) = self.band(hi, rings.is_empty())?;
+            if let Some(last) = rings.last_mut() {
+                last.length_mm = hi_length;
+            }
+            if self.admissible(&mut band, self.r_min)? {
+                if rings.is_empty() {
+                    return Err(SpacingError::ToolLargerThanPart { radius_mm: self.ball });
+                }
+                if let Mode::Annulus { .. } = self.mode {
+                    let (_, len) = self.band(self.r_min, false)?;
+                    rings.push(Ring { radius: self.r_min, length_mm: len });
+                }
+                break;
+            }
+            let radius = self.next_radius(&mut band, last_step)?;
+            if !(hi - radius > 1e-12) {
+                return Err(SpacingError::NoProgress { ring: rings.len() + 1, radius: hi });
+            }
+            last_step = Some(hi - radius);
+            rings.push(Ring { radius, length_mm: 0.0 });
+            if rings.len() > self.options.max_rings {
+                return Err(SpacingError::TooManyRings { max: self.options.max_rings });
+            }
+        }
+        if let (Mode::Disk, Some(last)) = (self.mode, rings.last_mut()) {
+            if last.length_mm == 0.0 {
+                last.length_mm = self.ring_length(last.radius)?.0;
+            }
+        }
+        Ok(Rings {
+            rings,
+            mode: self.mode,
+            r_min: self.r_min,
+            planned_scallop_mm: self.h,
+            meridians: self.meridians,
+            trials: self.trials,
+            fold_compromises: self.fold_compromises,
+        })
+    }
+
+    /// Smallest admissible radius below `band.hi`: a warm-started bracket, then bisection.
+    fn next_radius(&mut self, band: &mut Band, last_step: Option<f64>) -> Result<f64, SpacingError> {
+        let hi = band.hi;
+        let (mut ok, mut bad) = (hi, self.r_min);
+        let mut step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
+        // Expand downwards from the last step until a radius fails.
+        loop {
+            let guess = hi - step;
+            if guess <= self.r_min {
+                break;
+            }
+            if self.admissible(band, guess)? {
+                ok = guess;
+                step *= 1.5;
+            } else {
+                bad = guess;
+                break;
+            }
+        }
+        while ok - bad > self.options.step_tolerance * (hi - ok).max(1e-9) && ok - bad > 1e-13 {
+            let mid = 0.5 * (ok + bad);
+            if self.admissible(band, mid)? {
+                ok = mid;
+            } else {
+                bad = mid;
+            }
+        }
+        // Never run a ring along a slit or through a fold: moving it up only narrows the band;
+        // when that reaches ring k, below the fold it must be checked again.
+        let mut nudged = ok;
+        for s in &self.slits {
+            if (nudged - s.radius).abs() < s.sag {
+                nudged = s.radius + s.sag;
+            }
+        }
+        if let Some(&(lo, hi_f)) = self.forbidden.iter().find(|(lo, hi_f)| nudged > *lo && nudged < *hi_f) {
+            if hi_f < hi {
+                nudged = hi_f;
+            } else if lo > self.r_min {
+                // A ring in a fold could jump across the hole: continuity wins over the cusp
+                // test of the few meridians at this slit tip (reported, and seen by `verify`).
+                if !self.admissible(band, lo)? {
+                    self.fold_compromises += 1;
+                }
+                nudged = lo;
+            }
+        }
+        let ok = nudged;
+        Ok(ok)
+    }
+
+    /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip) and
+    /// ring k's centre chains on them; also the ring's length.
+    fn band(&mut self, hi: f64, first: bool) -> Result<(Band, f64), SpacingError> {
+        let (length, cumulative) = self.ring_length(hi)?;
+        let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
+        let mut thetas: Vec<f64> = Vec::with_capacity(n + 6 * self.slits.len());
+        let m = cumulative.len() - 1;
+        let mut j = 0;
+        for i in 0..n {
+            let target = length * i as f64 / n as f64;
+            while j + 1 < m && cumulative[j + 1] < target {
+                j += 1;
+            }
+            let seg = cumulative[j + 1] - cumulative[j];
+            let f = if seg > 0.0 { (target - cumulative[j]) / seg } else { 0.0 };
+            thetas.push(TAU * (j as f64 + f) / m as f64);
+        }
+        for s in &self.slits {
+            for t in [s.theta_start, s.theta_start + s.extent] {
+                for d in [-2e-3, 0.0, 2e-3] {
+                    thetas.push((t + d).rem_euclid(TAU));
+                }
+            }
+        }
+        thetas.sort_by(f64::total_cmp);
+        thetas.dedup();
+        self.meridians += thetas.len();
+        let upper = if first {
+            None
+        } else {
+            Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?)
+        };
+        Ok((Band { hi, thetas, upper, last_fail: 0 }, length))
+    }
+
+    /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
+    fn ring_length(&self, rho: f64) -> Result<(f64, Vec<f64>), SpacingError> {
+        const M: usize = 2048;
+        let mut cumulative = Vec::with_capacity(M + 1);
+        cumulative.push(0.0);
+        let mut prev = self.point(rho, 0.0)?.p;
+        let mut total = 0.0;
+        for i in 1..=M {
+            let p = self.point(rho, TAU * i as f64 / M as f64)?.p;
+            total += (p - prev).length();
+            cumulative.push(total);
+            prev = p;
+        }
+        Ok((total, cumulative))
+    }
+
+    fn point(&self, rho: f64, theta: f64) -> Result<Lifted, SpacingError> {
+        self.lift.polar(rho, theta).ok_or(SpacingError::Lift { rho, theta })
+    }
+
+    /// Point of S^h on the meridian θ at radius s.
+    fn q(&self, s: f64, theta: f64) -> Result<DVec3, SpacingError> {
+        let l = self.point(s, theta)?;
+        Ok(l.p + l.n * self.h)
+    }
+
+    /// Ball centres of the ring `rho` around angle θ: five centres spanning about ±R along
+    /// the ring, enough to contain the nearest centre to any point of the band on this meridian.
+    fn chain(&self, rho: f64, theta: f64) -> Result<Chain, SpacingError> {
+        let centre = |t: f64| -> Result<DVec3, SpacingError> {
+            let l = self.point(rho, t)?;
+            Ok(l.p + l.n * self.ball)
+        };
+        let c0 = centre(theta)?;
+        let probe = 1e-4;
+        let speed = (centre(theta + probe)? - c0).length() / probe;
+        if !(speed > 1e-9) {
+            return Ok([c0; 5]); // the pole: every angle is the same point
+        }
+        let dt = (0.5 * self.ball / speed).min(0.4);
+        Ok([centre(theta - 2.0 * dt)?, centre(theta - dt)?, c0, centre(theta + dt)?, centre(theta + 2.0 * dt)?])
+    }
+
+    /// Whether a ring at `rho` (with ring k at `band.hi` above it, or the boundary) leaves every
+    /// tested meridian of the band cut.
+    fn admissible(&mut self, band: &mut Band, rho: f64) -> Result<bool, SpacingError> {
+        self.trials += 1;
+        let n = band.thetas.len();
+        for k in 0..n {
+            let i = (band.last_fail + k) % n;
+            if !self.meridian_ok(band, i, rho)? {
+                band.last_fail = i;
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    fn meridian_ok(&self, band: &Band, i: usize, rho: f64) -> Result<bool, SpacingError> {
+        let theta = band.thetas[i];
+        let r = self.ball;
+        let mut crossing: Option<&SlitBand> = None;
+        for s in &self.slits {
+            if s.radius > rho && s.radius < band.hi && s.contains(theta) {
+                if crossing.is_some() {
+                    return Ok(false); // a strip between two holes is cut by neither ring
+                }
+                crossing = Some(s);
+            }
+        }
+        let lower = self.chain(rho, theta)?;
+        match (&band.upper, crossing) {
+            // First ring: the band up to the boundary is cut by this ring alone.
+            (None, Some(_)) => Ok(false),
+            (None, None) => Ok(dist_chain(self.q(band.hi, theta)?, &lower) <= r),
+            // A hole in between: ring k cuts down to its upper rim, this ring up to its lower one.
+            (Some(upper), Some(s)) => {
+                let up = self.q(s.radius + s.sag, theta)?;
+                let down = self.q((s.radius - s.sag).max(rho), theta)?;
+                Ok(dist_chain(up, &upper[i]) <= r && dist_chain(down, &lower) <= r)
+            }
+            (Some(upper), None) => self.cusp_ok(&upper[i], &lower, rho, band.hi, theta),
+        }
+    }
+
+    /// The cusp between two rings on one meridian: where the distances to both centre chains are
+    /// equal (regula falsi, Illinois variant); cut when that distance is at most R.
+    fn cusp_ok(&self, upper: &Chain, lower: &Chain, lo: f64, hi: f64, theta: f64) -> Result<bool, SpacingError> {
+        let r = self.ball;
+        let qa = self.q(lo, theta)?;
+        let (du_a, dl_a) = (dist_chain(qa, upper), dist_chain(qa, lower));
+        if du_a <= r {
+            return Ok(true);
+        }
+        let qb = self.q(hi, theta)?;
+        let (du_b, dl_b) = (dist_chain(qb, upper), dist_chain(qb, lower));
+        if dl_b <= r {
+            return Ok(true);
+        }
+        // g = d_upper − d_lower: positive at lo, negative at hi.
+        let (mut a, mut ga) = (lo, du_a - dl_a);
+        let (mut b, mut gb) = (hi, du_b - dl_b);
+        if ga <= 0.0 || gb >= 0.0 {
+            // Not the usual picture (strongly curved meridian): fall back to the safe answer.
+            return Ok(du_a.min(dl_a) <= r && du_b.min(dl_b) <= r);
+        }
+        let mut worst = f64::NEG_INFINITY;
+        let mut side = 0i8;
+        for _ in 0..40 {
+            let s = (a * gb - b * ga) / (gb - ga);
+            let q = self.q(s, theta)?;
+            let (du, dl) = (dist_chain(q, upper), dist_chain(q, lower));
+            worst = worst.max(du.min(dl));
+            if worst > r {
+                return Ok(false);
+            }
+            let g = du - dl;
+            if g.abs() <= 1e-9 * r || (b - a) <= 1e-12 * (hi - lo) {
+                break;
+            }
+            if g > 0.0 {
+                (a, ga) = (s, g);
+                if side == 1 {
+                    gb *= 0.5;
+                }
+                side = 1;
+            } else {
+                (b, gb) = (s, g);
+                if side == -1 {
+                    ga *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        Ok(worst <= r)
+    }
+}
+
+/// Distance from `q` to the polyline through the chain's centres.
+fn dist_chain(q: DVec3, chain: &Chain) -> f64 {
+    let mut d2 = f64::INFINITY;
+    for k in 0..4 {
+        d2 = d2.min(segment_dist2(q, chain[k], chain[k + 1]));
+    }
+    d2.sqrt()
+}
+
+/// Squared distance from `q` to the segment ab.
+pub(crate) fn segment_dist2(q: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    let t = if l2 > 0.0 { ((q - a).dot(ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (a + ab * t - q).length_squared()
+}
+
