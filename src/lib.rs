@@ -11,6 +11,7 @@
 //! | analytic test surfaces | [`fixtures`] | implemented |
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
+//! | optimal pole: scallop-uniformity energy E_min and its minimisation | [`origin`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 
 pub mod bench;
@@ -19,6 +20,7 @@ pub mod flatten;
 pub mod linalg;
 pub mod mesh;
 pub mod num;
+pub mod origin;
 pub mod slitmap;
 
 #[cfg(target_arch = "wasm32")]
