@@ -125,7 +125,12 @@ fn optimum_of_a_centrally_symmetric_part_is_its_centre() {
 
 #[test]
 fn search_agrees_with_a_brute_force_grid_of_poles() {
-    let p = part(&fixtures::plate_3_holes());
+    for (name, mesh) in [("plate", fixtures::plate_3_holes()), ("saddle", fixtures::saddle_2_holes())] {
+        grid_check(name, &part(&mesh));
+    }
+}
+
+fn grid_check(name: &str, p: &Part) {
     let options = OriginOptions::default();
     let ev = EnergyEvaluator::new(&p.surface, &p.solver, &options).unwrap();
     // Every face centre of the flattened plate, plus each hole's annulus.
@@ -144,9 +149,9 @@ fn search_agrees_with_a_brute_force_grid_of_poles() {
             }
         }
     }
-    let o = origin(&p, &options).unwrap();
+    let o = origin(p, &options).unwrap();
     eprintln!(
-        "plate: search E_min {:.4} at {:.3} in {} evaluations; grid best {:.4} at {:.3} over {} poles",
+        "{name}: search E_min {:.4} at {:.3} in {} evaluations; grid best {:.4} at {:.3} over {} poles",
         o.energy.e_min,
         o.pole,
         o.evaluations,
@@ -154,7 +159,7 @@ fn search_agrees_with_a_brute_force_grid_of_poles() {
         grid_best.1,
         poles.len()
     );
-    assert!(o.energy.e_min <= 1.01 * grid_best.0, "search {} grid {}", o.energy.e_min, grid_best.0);
+    assert!(o.energy.e_min <= 1.01 * grid_best.0, "{name}: search {} grid {}", o.energy.e_min, grid_best.0);
 }
 
 #[test]

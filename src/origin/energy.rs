@@ -13,7 +13,7 @@ pub struct Energy {
     /// min over f of E^S (seed eq. 18), mm²: Σ over radius bins of 2·sqrt(Σα·Σβ).
     pub e_min: f64,
     /// `e_min / (2 · energy area)`, ≥ 1 (Cauchy–Schwarz); 1 = perfectly uniform predicted scallop.
-    /// The energy area is the surface area minus the gouge-risk and rim faces.
+    /// The energy area is the surface area minus the gouge-risk faces.
     pub uniformity: f64,
     /// Area of the faces where κ_n + 1/R ≤ 0 along ∇|w| (the ball cannot fit the concave
     /// curvature): excluded from the energy, mm².
@@ -29,10 +29,13 @@ pub struct Energy {
 /// Per-face precomputations of the energy (3D gradient operators, areas, curvature tensors), so
 /// that one evaluation after the slit map is a single O(faces) pass.
 ///
-/// ∇r on a face is ∇|w| at the face centre computed from the P1 gradient of w (Re and Im), not
-/// the P1 gradient of |w|: the two agree away from the pole, but |w| has a cone at the pole and
-/// the P1 gradient of |w| nearly vanishes on a pole face whose corners are about equally far
-/// from it, which made E_min jump by percents between nearby poles.
+/// ∇r on a face: direction radial, Re(w̄ ∇w)/|w| at the face centre, length the conformal scale
+/// |F′| = sqrt((|∇Re w|² + |∇Im w|²)/2), both from the P1 gradient of w. For a conformal map
+/// |∇|w|| = |F′| exactly; computing it this way instead of as the P1 gradient of |w| matters in
+/// two places where the latter nearly vanishes by accident and made E_min jump by tens of
+/// percents between nearby poles: the pole face (|w| has a cone there, its corners can be about
+/// equally far from the pole) and the sliver faces at slit tips (the boundary folds onto the arc
+/// there, and the P1 Jacobian of w is nearly singular in the radial direction).
 #[derive(Debug, Clone)]
 pub struct EnergyEvaluator<'a> {
     solver: &'a SlitMapSolver,
@@ -41,9 +44,6 @@ pub struct EnergyEvaluator<'a> {
     n_vertices: usize,
     /// Faces in the energy: (face, gradient operators ∇φ_k of its corners, area).
     faces: Vec<(u32, [DVec3; 3], f64)>,
-    /// Faces whose corners all lie on one boundary loop: |w| is constant on them (P1), so the
-    /// scallop direction is undefined there; left out of the energy.
-    rim_faces: usize,
     tool_curvature: f64,
     bins: usize,
 }
@@ -54,26 +54,12 @@ impl<'a> EnergyEvaluator<'a> {
     pub fn new(surface: &'a Surface, solver: &'a SlitMapSolver, options: &OriginOptions) -> Result<Self, OriginError> {
         super::check_energy_options(options)?;
         let n = surface.positions.len();
-        let mut loop_of = vec![usize::MAX; n];
-        for (li, lp) in surface.loops.iter().enumerate() {
-            for &v in lp {
-                if let Some(slot) = loop_of.get_mut(v as usize) {
-                    *slot = li;
-                }
-            }
-        }
         let mut faces = Vec::with_capacity(surface.triangles.len());
-        let mut rim_faces = 0;
         for (f, t) in surface.triangles.iter().enumerate() {
             if t.iter().any(|&v| v as usize >= n) {
                 return Err(OriginError::SurfaceMismatch {
                     what: format!("triangle {f} refers to vertex {} of {n}", t.iter().max().unwrap_or(&0)),
                 });
-            }
-            let l = t.map(|v| loop_of[v as usize]);
-            if l[0] != usize::MAX && l[0] == l[1] && l[1] == l[2] {
-                rim_faces += 1;
-                continue;
             }
             let p = t.map(|v| surface.positions[v as usize]);
             let cross = (p[1] - p[0]).cross(p[2] - p[0]);
@@ -101,7 +87,6 @@ impl<'a> EnergyEvaluator<'a> {
             curvature: &surface.curvature,
             n_vertices: n,
             faces,
-            rim_faces,
             tool_curvature: 1.0 / options.radius_mm,
             bins: options.bins,
         })
@@ -110,11 +95,6 @@ impl<'a> EnergyEvaluator<'a> {
     /// The solver the poles are mapped with.
     pub fn solver(&self) -> &'a SlitMapSolver {
         self.solver
-    }
-
-    /// Faces left out of every evaluation because all three corners lie on one boundary loop.
-    pub fn rim_faces(&self) -> usize {
-        self.rim_faces
     }
 
     /// E_min of `pole`: `solver.map(pole)` then [`EnergyEvaluator::evaluate_map`].
@@ -228,16 +208,16 @@ impl<'a> EnergyEvaluator<'a> {
     fn face_terms(&self, map: &SlitMap, f: u32, grad: &[DVec3; 3]) -> Result<Option<(f64, f64)>, OriginError> {
         let t = self.triangles[f as usize];
         let w = t.map(|v| map.w[v as usize]);
-        // ∇|w| = (Re w ∇Re w + Im w ∇Im w)/|w| at the face centre, with the P1 gradient of w:
-        // w is smooth (analytic) where |w| has a cone at the pole, and the P1 gradient of |w|
-        // itself vanishes on a pole face whose corners are about equally far from the pole.
+        // The direction of ∇r is radial, Re(w̄ ∇w)/|w| at the face centre; its length is the
+        // conformal scale |F′| = sqrt((|∇Re w|² + |∇Im w|²)/2) of the P1 gradient of w (see the
+        // type's docs for why not the P1 gradient of |w|).
         let d_re = grad[0] * w[0].x + grad[1] * w[1].x + grad[2] * w[2].x;
         let d_im = grad[0] * w[0].y + grad[1] * w[1].y + grad[2] * w[2].y;
+        let g2 = 0.5 * (d_re.length_squared() + d_im.length_squared());
         let wc = (w[0] + w[1] + w[2]) / 3.0;
-        let len = wc.length();
-        // The pole exactly at the face centre's image: every direction is radial.
-        let g = if len > 0.0 { (d_re * wc.x + d_im * wc.y) / len } else { d_re };
-        let g2 = g.length_squared();
+        let radial = d_re * wc.x + d_im * wc.y;
+        // The pole exactly at the face centre's image (or a degenerate image): any direction.
+        let g = if radial.length_squared() > 0.0 { radial } else { d_re };
         let kc = self.curvature[f as usize].normal_curvature(g) + self.tool_curvature;
         if !(g2 > 0.0 && g2.is_finite() && kc.is_finite()) {
             return Err(OriginError::NotFinite { pole: map.pole, face: Some(f as usize) });

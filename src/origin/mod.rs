@@ -10,8 +10,9 @@
 //! curvature). The energy E^S (seed eq. 17 / C-5) sums A_F (a_F + 1/a_F), a_F = (κ_F + 1/R) /
 //! (8|∇T_F|²), over the faces F.
 //!
-//! ∇T = f′(r)∇r, so the curvature direction does not depend on f: it is the 3D gradient of the
-//! P1 interpolant of r on each face. With f piecewise linear over `bins` equal radius bins of
+//! ∇T = f′(r)∇r, so the curvature direction does not depend on f: it is the 3D gradient of r
+//! on each face, computed from the P1 gradient of w (radial direction, conformal scale |F′|; see
+//! [`EnergyEvaluator`] for why not from the P1 interpolant of |w|). With f piecewise linear over `bins` equal radius bins of
 //! [R_min, 1] and slope s_j in bin j, the energy of bin j is Σ_F A_F (α_F/s_j² + β_F s_j²) with
 //! α_F = (κ_F + 1/R)/(8|∇r_F|²), β_F = 8|∇r_F|²/(κ_F + 1/R), whose minimum over s_j > 0 is
 //! 2·sqrt(Σα·Σβ) at s_j² = sqrt(Σα/Σβ): a closed form replacing App. C's perturbation iteration.
@@ -22,8 +23,6 @@
 //!
 //! Faces with κ_n + 1/R ≤ 0 along ∇r are where the ball is larger than the concave curvature:
 //! a **gouge risk**, excluded from the energy and reported with their area, never clamped.
-//! Faces whose three corners lie on one boundary loop have constant r (P1) and no scallop
-//! direction: excluded too ([`EnergyEvaluator::rim_faces`]).
 //!
 //! [`find_origin`] then minimises E_min over poles (seed eqs. 19–22, Pseudocode C-2; `search`):
 //! the annulus option of every hole (E_min is constant over a hole), then gradient descent from

@@ -274,3 +274,39 @@ impl<'s, 'a> Search<'s, 'a> {
         best
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flatten::{self, FlattenInput, FlattenOptions};
+    use crate::mesh::{self, MeshOptions};
+    use crate::origin::{pole_to_3d, OriginOptions};
+    use crate::slitmap::{SlitMapOptions, SlitMapSolver};
+    use glam::DVec3;
+
+    #[test]
+    fn descents_from_every_spread_start_reach_the_centre_of_a_symmetric_part() {
+        // find_origin starts at the centroid, which is the centre here: this checks that the
+        // descents from the other, off-centre starts get there too.
+        let surface =
+            mesh::from_triangles(&crate::fixtures::symmetric_4_holes(), &MeshOptions::default()).unwrap().surface;
+        let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default()).unwrap();
+        let domain = PlanarDomain::of_surface(&surface, flat.uv);
+        let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).unwrap();
+        let options = OriginOptions::default();
+        let ev = EnergyEvaluator::new(&surface, &solver, &options).unwrap();
+        let mut s = Search::new(&ev, &domain, 10_000, options.tolerance_rel);
+        let centroid = crate::origin::centroid_pole(&domain);
+        let starts = s.starts(centroid, 5);
+        assert_eq!(starts.len(), 5);
+        for &start in &starts[1..] {
+            let e = s.eval(start).unwrap();
+            let (end, e_end) = s.descend(start, e, &[]).unwrap();
+            let p3 = pole_to_3d(&surface, &domain, end, None);
+            let off = p3.distance(DVec3::new(0.0, 0.0, 8.0));
+            assert!(e_end < e && off < 0.02 * 113.0, "start {start}: ended {off} mm from the centre");
+            // The starts are spread: none is near the centre.
+            assert!(pole_to_3d(&surface, &domain, start, None).truncate().length() > 10.0);
+        }
+    }
+}
