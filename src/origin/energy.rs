@@ -53,6 +53,15 @@ impl<'a> EnergyEvaluator<'a> {
     /// on the flattening of `surface`: same vertices and triangles).
     pub fn new(surface: &'a Surface, solver: &'a SlitMapSolver, options: &OriginOptions) -> Result<Self, OriginError> {
         super::check_energy_options(options)?;
+        if surface.curvature.len() != surface.triangles.len() {
+            return Err(OriginError::SurfaceMismatch {
+                what: format!(
+                    "{} curvature tensors for {} triangles",
+                    surface.curvature.len(),
+                    surface.triangles.len()
+                ),
+            });
+        }
         let n = surface.positions.len();
         let mut faces = Vec::with_capacity(surface.triangles.len());
         for (f, t) in surface.triangles.iter().enumerate() {
@@ -71,15 +80,6 @@ impl<'a> EnergyEvaluator<'a> {
             // ∇φ_k = n̂ × e_k / (2A) with e_k the edge opposite corner k (counter-clockwise).
             let grad = [0, 1, 2].map(|k| cross.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / c2);
             faces.push((f as u32, grad, 0.5 * c2.sqrt()));
-        }
-        if surface.curvature.len() != surface.triangles.len() {
-            return Err(OriginError::SurfaceMismatch {
-                what: format!(
-                    "{} curvature tensors for {} triangles",
-                    surface.curvature.len(),
-                    surface.triangles.len()
-                ),
-            });
         }
         Ok(Self {
             solver,
@@ -272,8 +272,8 @@ mod tests {
 
     #[test]
     fn flat_disk_with_central_pole_is_nearly_uniform() {
-        // r = |z| on the unit disk: |∇r| = 1 and κ = 0, so α = 1/(8R), β = 8R on every face: the
-        // closed form gives 2·area with slopes sqrt(1/(8R))^(1/2)... up to the P1 error of |z|.
+        // r ≈ |z| on the unit disk: |∇r| = 1 and κ = 0, so α = 1/(8R) and β = 8R on every face
+        // and the closed form gives 2·area (uniformity 1), up to the P1 error of the map.
         let (surface, domain) = planar(&crate::fixtures::unit_disk(16));
         let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).unwrap();
         let options = OriginOptions { radius_mm: 2.0, bins: 8, ..Default::default() };

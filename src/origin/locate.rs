@@ -159,20 +159,28 @@ pub fn pole_from_3d(surface: &Surface, domain: &PlanarDomain, p: DVec3) -> DVec2
 }
 
 /// The 3D surface point of a pole: the barycentric image of the flattened face containing it
-/// (disk pole), or the centroid of hole `hole`'s rim (annulus pole; edge-length weighted), or
-/// for a disk pole that no face contains (between faces by rounding) the nearest face centre.
+/// (disk pole), or the centroid of hole `hole`'s rim (annulus pole, loop index ≥ 1; edge-length
+/// weighted), or for a disk pole that no face contains (between faces by rounding) the nearest
+/// face centre. `domain` must be the flattening of `surface`; NaN when it is empty.
 pub fn pole_to_3d(surface: &Surface, domain: &PlanarDomain, pole: DVec2, hole: Option<usize>) -> DVec3 {
-    if let Some(h) = hole {
-        return rim_centroid(surface, &surface.loops[h]);
+    if let Some(lp) = hole.and_then(|h| surface.loops.get(h)) {
+        return rim_centroid(surface, lp);
     }
-    if let Some((f, bary)) = face_containing(domain, pole) {
-        let t = surface.triangles[f];
-        return (0..3).map(|k| surface.positions[t[k] as usize] * bary[k]).sum();
+    let face = match face_containing(domain, pole) {
+        Some((f, bary)) => {
+            if let Some(t) = surface.triangles.get(f) {
+                return (0..3).map(|k| surface.positions[t[k] as usize] * bary[k]).sum();
+            }
+            None
+        }
+        None => (0..domain.triangles.len()).min_by(|&a, &b| {
+            face_centroid(domain, a).distance(pole).total_cmp(&face_centroid(domain, b).distance(pole))
+        }),
+    };
+    match face.and_then(|f| surface.triangles.get(f)) {
+        Some(t) => t.iter().map(|&v| surface.positions[v as usize]).sum::<DVec3>() / 3.0,
+        None => DVec3::NAN,
     }
-    let face = (0..domain.triangles.len())
-        .min_by(|&a, &b| face_centroid(domain, a).distance(pole).total_cmp(&face_centroid(domain, b).distance(pole)))
-        .expect("the domain has triangles");
-    surface.triangles[face].iter().map(|&v| surface.positions[v as usize]).sum::<DVec3>() / 3.0
 }
 
 /// Edge-length weighted centroid of a closed 3D polyline.

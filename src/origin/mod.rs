@@ -170,15 +170,20 @@ pub fn find_origin(
     let ev = EnergyEvaluator::new(surface, solver, options)?;
     let centroid = centroid_pole(domain);
     let centroid_energy = ev.evaluate(centroid)?;
-    let (pole, energy, evaluations, trace) = match options.choice {
+    let Picked { pole, energy, evaluations, trace } = match options.choice {
         OriginChoice::Auto => {
             let mut s = search::Search::new(&ev, domain, options.max_evaluations, options.tolerance_rel);
             s.record(centroid, centroid_energy.clone());
             s.run(centroid, centroid_energy.e_min, options.starts);
             let (pole, energy) = s.best.ok_or(OriginError::NoFeasiblePole)?;
-            (pole, energy, s.evaluations, s.trace)
+            Picked { pole, energy, evaluations: s.evaluations, trace: s.trace }
         }
-        OriginChoice::Centroid => (centroid, centroid_energy.clone(), 1, vec![(centroid, centroid_energy.e_min)]),
+        OriginChoice::Centroid => Picked {
+            pole: centroid,
+            energy: centroid_energy.clone(),
+            evaluations: 1,
+            trace: vec![(centroid, centroid_energy.e_min)],
+        },
         OriginChoice::Point3d(p) => single(&ev, centroid, &centroid_energy, pole_from_3d(surface, domain, p))?,
         OriginChoice::Hole(n) => {
             let holes = solver.hole_count();
@@ -208,15 +213,18 @@ pub fn find_origin(
 }
 
 /// An explicit pole: its energy, two evaluations (the centroid's and its own).
-fn single(
-    ev: &EnergyEvaluator,
-    centroid: DVec2,
-    centroid_energy: &Energy,
-    pole: DVec2,
-) -> Result<(DVec2, Energy, usize, Vec<(DVec2, f64)>), OriginError> {
+fn single(ev: &EnergyEvaluator, centroid: DVec2, centroid_energy: &Energy, pole: DVec2) -> Result<Picked, OriginError> {
     let energy = ev.evaluate(pole)?;
     let trace = vec![(centroid, centroid_energy.e_min), (pole, energy.e_min)];
-    Ok((pole, energy, 2, trace))
+    Ok(Picked { pole, energy, evaluations: 2, trace })
+}
+
+/// The pole picked by a choice, before its 3D point is computed.
+struct Picked {
+    pole: DVec2,
+    energy: Energy,
+    evaluations: usize,
+    trace: Vec<(DVec2, f64)>,
 }
 
 /// The options the energy needs (radius, bins).
