@@ -5,6 +5,7 @@
 use crate::fixtures;
 use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
 use crate::mesh::{self, MeshOptions, TriMesh};
+use crate::origin::{self, EnergyEvaluator, OriginOptions};
 use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
 use glam::DVec3;
 use serde::Serialize;
@@ -175,6 +176,106 @@ pub fn format_row(f: &ConformalFigures) -> String {
 pub const TABLE_HEADER: &str =
     "case                           faces holes   mesh ms BFF fact ms  BFF ms   slit fact ms  pole ms";
 
+/// Figures of one origin-stage run, milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct OriginFigures {
+    pub name: String,
+    pub faces: usize,
+    pub holes: usize,
+    /// Mean `EnergyEvaluator::evaluate_map` (the energy of a slit map already solved).
+    pub energy_ms: f64,
+    /// Mean `EnergyEvaluator::evaluate` (slit map for the pole + energy).
+    pub evaluate_ms: f64,
+    /// `find_origin` with the default options (Auto).
+    pub search_ms: f64,
+    pub evaluations: usize,
+    pub e_min: f64,
+    pub centroid_e_min: f64,
+    pub uniformity: f64,
+}
+
+/// The analytic origin cases: the sample part (about 10 000 faces, 4 holes) and the
+/// symmetric part.
+pub fn origin_cases() -> Vec<(String, TriMesh)> {
+    vec![
+        ("freeform_4_holes".into(), fixtures::freeform_4_holes()),
+        ("symmetric_4_holes".into(), fixtures::symmetric_4_holes()),
+    ]
+}
+
+/// Prepares mesh → flatten → slit-map solver (untimed), then times one energy evaluation
+/// (mean over the centroid pole and every hole's pole) and the whole pole search.
+pub fn run_origin(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<OriginFigures, String> {
+    let surface = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?.surface;
+    let flat = BffSolver::new(FlattenInput::from(&surface), &FlattenOptions::default())
+        .and_then(|b| b.flatten())
+        .map_err(|e| e.to_string())?;
+    let domain = PlanarDomain::of_surface(&surface, flat.uv);
+    let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(|e| e.to_string())?;
+    let options = OriginOptions::default();
+    let ev = EnergyEvaluator::new(&surface, &solver, &options).map_err(|e| e.to_string())?;
+    let mut poles = vec![origin::centroid_pole(&domain)];
+    poles.extend((1..domain.loops.len()).map(|h| solver.canonical_hole_pole(h)));
+    let maps = poles.iter().map(|&p| solver.map(p)).collect::<Result<Vec<_>, _>>().map_err(|e| e.to_string())?;
+    let t = now();
+    for m in &maps {
+        ev.evaluate_map(m).map_err(|e| e.to_string())?;
+    }
+    let energy_ms = (now() - t) / maps.len() as f64;
+    let t = now();
+    for &p in &poles {
+        ev.evaluate(p).map_err(|e| e.to_string())?;
+    }
+    let evaluate_ms = (now() - t) / poles.len() as f64;
+    let t = now();
+    let o = origin::find_origin(&surface, &domain, &solver, &options).map_err(|e| e.to_string())?;
+    let search_ms = now() - t;
+    Ok(OriginFigures {
+        name: name.to_string(),
+        faces: surface.triangles.len(),
+        holes: surface.loops.len() - 1,
+        energy_ms,
+        evaluate_ms,
+        search_ms,
+        evaluations: o.evaluations,
+        e_min: o.energy.e_min,
+        centroid_e_min: o.centroid_energy.e_min,
+        uniformity: o.energy.uniformity,
+    })
+}
+
+/// Best of `runs` per time figure.
+pub fn best_origin(name: &str, part: &TriMesh, runs: usize, now: &dyn Fn() -> f64) -> Result<OriginFigures, String> {
+    let mut best = run_origin(name, part, now)?;
+    for _ in 1..runs {
+        let r = run_origin(name, part, now)?;
+        best.energy_ms = best.energy_ms.min(r.energy_ms);
+        best.evaluate_ms = best.evaluate_ms.min(r.evaluate_ms);
+        best.search_ms = best.search_ms.min(r.search_ms);
+    }
+    Ok(best)
+}
+
+pub const ORIGIN_HEADER: &str =
+    "case                           faces holes energy ms  eval ms  search ms evals      E_min   centroid uniformity";
+
+/// One table row.
+pub fn format_origin(f: &OriginFigures) -> String {
+    format!(
+        "{:<28} {:>7} {:>5} {:>9.3} {:>8.2} {:>10.1} {:>5} {:>10.4} {:>10.4} {:>10.4}",
+        f.name,
+        f.faces,
+        f.holes,
+        f.energy_ms,
+        f.evaluate_ms,
+        f.search_ms,
+        f.evaluations,
+        f.e_min,
+        f.centroid_e_min,
+        f.uniformity
+    )
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -187,5 +288,18 @@ mod tests {
         let f = super::run_conformal("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
         assert_eq!((f.holes, f.poles), (3, 4));
         assert!(f.mesh_ms > 0.0 && f.slitmap_pole_ms > 0.0);
+    }
+
+    #[test]
+    fn the_origin_case_runs_and_times_every_part() {
+        let clock = std::cell::Cell::new(0.0);
+        let now = || {
+            clock.set(clock.get() + 1.0);
+            clock.get()
+        };
+        let f = super::run_origin("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
+        assert_eq!(f.holes, 3);
+        assert!(f.energy_ms > 0.0 && f.evaluate_ms > 0.0 && f.search_ms > 0.0);
+        assert!(f.evaluations > 0 && f.e_min <= f.centroid_e_min);
     }
 }

@@ -206,6 +206,23 @@ pub fn freeform_4_holes() -> TriMesh {
     lift(&p, t, freeform_height)
 }
 
+const SYMMETRIC_HOLES: [(f64, f64, f64); 4] =
+    [(20.0, 20.0, 6.0), (-20.0, 20.0, 6.0), (-20.0, -20.0, 6.0), (20.0, -20.0, 6.0)];
+
+/// A centrally symmetric part: the dome z = 8·cos(πx/80)·cos(πy/80) over the 80 × 80 mm square
+/// x, y ∈ [−40, 40] (height range 8 mm, convex seen from the tool), with four holes whose
+/// projections are circles of radius 6 mm centred at (±20, ±20). Shape and holes are symmetric
+/// under the quarter turn about the Z axis, so the centre (0, 0, 8) is the centre of symmetry
+/// (the mesh itself is only nearly symmetric: lattice and jitter are not).
+///
+/// Height field over a Delaunay mesh, edge length ≈ 1.5 mm, about 6 000 faces, normals up.
+/// Topology: 5 boundary loops, Euler characteristic −3.
+pub fn symmetric_4_holes() -> TriMesh {
+    let (p, t) = planar_domain_with_holes(&rect(-40.0, -40.0, 40.0, 40.0), &circles(&SYMMETRIC_HOLES), 1.5, 0x5E7);
+    let k = std::f64::consts::PI / 80.0;
+    lift(&p, t, |q| 8.0 * (k * q.x).cos() * (k * q.y).cos())
+}
+
 /// A deliberately low-quality mesh: a gently curved 100 × 60 mm sheet (x ∈ [−50, 50],
 /// y ∈ [−30, 30], z = −x²/400 + xy/500) meshed by a 200 × 6 structured grid of 0.5 × 10 mm cells
 /// (aspect ratios 20:1 and worse), with jittered columns, some columns only 2 µm wide
