@@ -12,6 +12,7 @@
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
+//! | scallop simulation of a ball-centre path, path figures | [`verify`] | implemented |
 
 pub mod bench;
 pub mod fixtures;
@@ -20,6 +21,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod num;
 pub mod slitmap;
+pub mod verify;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
