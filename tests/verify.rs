@@ -208,7 +208,9 @@ fn sphere_cap_under_rings_matches_the_analytic_scallop() {
     assert!(vertex_error < 1e-4 && rim_error < 1e-3);
     // Samples on a flat face lie below the sphere by at most ρ − (distance of its plane).
     let facet = (0..surface.triangles.len())
-        .map(|f| CAP_RHO - (surface.positions[surface.triangles[f][0] as usize] - cap_centre()).dot(surface.face_normals[f]))
+        .map(|f| {
+            CAP_RHO - (surface.positions[surface.triangles[f][0] as usize] - cap_centre()).dot(surface.face_normals[f])
+        })
         .fold(0.0, f64::max);
     println!("sphere cap mesh: max {} vs exact {max_exact} + facet depth {facet}", v.max_scallop_mm);
     assert!(v.max_scallop_mm > max_exact - 1e-4 && v.max_scallop_mm < max_exact + 1.01 * facet);
@@ -241,7 +243,11 @@ fn a_plunged_pass_is_a_gouge_of_the_right_depth() {
     let p = strip_area(20.0, w) / surface.area();
     let expected = p * v.samples as f64;
     let sigma = (expected * (1.0 - p)).sqrt();
-    assert!((v.gouges as f64 - expected).abs() < 5.0 * sigma, "{} gouges, expected {expected:.0} ± {sigma:.0}", v.gouges);
+    assert!(
+        (v.gouges as f64 - expected).abs() < 5.0 * sigma,
+        "{} gouges, expected {expected:.0} ± {sigma:.0}",
+        v.gouges
+    );
 }
 
 #[test]
