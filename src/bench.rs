@@ -6,7 +6,9 @@ use crate::fixtures;
 use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
 use crate::mesh::{self, MeshOptions, TriMesh};
 use crate::origin::{self, EnergyEvaluator, OriginOptions};
+use crate::num;
 use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
+use crate::verify::{self, SweptVolume, VerifyOptions};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -273,6 +275,80 @@ pub fn format_origin(f: &OriginFigures) -> String {
         f.e_min,
         f.centroid_e_min,
         f.uniformity
+/// The verifier's case: a wavy disk of radius 50 mm, z = 4 sin(x/17) cos(y/23)
+/// (`unit_disk(82)` scaled, 40 344 faces), under 171 parallel passes of ball centres (R = 3 mm)
+/// 0.6 mm apart with a centre every 0.4 mm (43 605 segments): centre = surface point + R·normal
+/// of the analytic surface.
+pub fn verify_case() -> Result<(mesh::Surface, Vec<Vec<DVec3>>), String> {
+    let height = |x: f64, y: f64| 4.0 * num::sin(x / 17.0) * num::cos(y / 23.0);
+    let mut disk = fixtures::unit_disk(82);
+    for p in &mut disk.positions {
+        let (x, y) = (50.0 * p.x, 50.0 * p.y);
+        *p = DVec3::new(x, y, height(x, y));
+    }
+    let surface = mesh::from_triangles(&disk, &MeshOptions::default()).map_err(|e| e.to_string())?.surface;
+    let r = VerifyOptions::default().radius_mm;
+    let passes = (0..171)
+        .map(|j| {
+            let y = -51.0 + 0.6 * j as f64;
+            (0..256)
+                .map(|i| {
+                    let x = -51.0 + 0.4 * i as f64;
+                    let fx = 4.0 / 17.0 * num::cos(x / 17.0) * num::cos(y / 23.0);
+                    let fy = -4.0 / 23.0 * num::sin(x / 17.0) * num::sin(y / 23.0);
+                    DVec3::new(x, y, height(x, y)) + r * DVec3::new(-fx, -fy, 1.0).normalize()
+                })
+                .collect()
+        })
+        .collect();
+    Ok((surface, passes))
+}
+
+/// Figures of one verifier run, milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct VerifyFigures {
+    pub faces: usize,
+    pub vertices: usize,
+    pub samples: usize,
+    pub segments: usize,
+    /// `SweptVolume::new` alone (the hierarchy over the segments).
+    pub build_ms: f64,
+    /// The whole `verify` call: build, sampling, every sample and vertex probed, statistics.
+    pub verify_ms: f64,
+    pub max_scallop_mm: f64,
+    pub uncovered_samples: usize,
+}
+
+/// Times the verifier on a surface and path with `samples` samples.
+pub fn run_verify(
+    surface: &mesh::Surface,
+    passes: &[Vec<DVec3>],
+    samples: usize,
+    now: &dyn Fn() -> f64,
+) -> Result<VerifyFigures, String> {
+    let options = VerifyOptions { samples, ..VerifyOptions::default() };
+    let t = now();
+    let volume = SweptVolume::new(passes, options.radius_mm).map_err(|e| e.to_string())?;
+    let build_ms = now() - t;
+    let t = now();
+    let v = verify::verify(surface, passes, &options).map_err(|e| e.to_string())?;
+    let verify_ms = now() - t;
+    Ok(VerifyFigures {
+        faces: surface.triangles.len(),
+        vertices: surface.positions.len(),
+        samples: v.samples,
+        segments: volume.segments(),
+        build_ms,
+        verify_ms,
+        max_scallop_mm: v.max_scallop_mm,
+        uncovered_samples: v.uncovered_samples,
+    })
+}
+
+pub fn format_verify(f: &VerifyFigures) -> String {
+    format!(
+        "verify, {} faces ({} vertices), {} samples, {} segments: hierarchy {:.1} ms, whole verify {:.1} ms (max scallop {:.4} mm, {} uncovered)",
+        f.faces, f.vertices, f.samples, f.segments, f.build_ms, f.verify_ms, f.max_scallop_mm, f.uncovered_samples
     )
 }
 
@@ -292,6 +368,7 @@ mod tests {
 
     #[test]
     fn the_origin_case_runs_and_times_every_part() {
+    fn the_verify_case_is_covered_and_timed() {
         let clock = std::cell::Cell::new(0.0);
         let now = || {
             clock.set(clock.get() + 1.0);
@@ -301,5 +378,12 @@ mod tests {
         assert_eq!(f.holes, 3);
         assert!(f.energy_ms > 0.0 && f.evaluate_ms > 0.0 && f.search_ms > 0.0);
         assert!(f.evaluations > 0 && f.e_min <= f.centroid_e_min);
+        let (surface, passes) = super::verify_case().unwrap();
+        let f = super::run_verify(&surface, &passes, 2000, &now).unwrap();
+        assert_eq!((f.faces, f.segments, f.samples), (40_344, 171 * 255, 2000));
+        // 0.6 mm apart with R = 3 on a gentle wave: about the flat R − √(R² − 0.3²) = 0.015 mm.
+        assert!(f.max_scallop_mm > 0.01 && f.max_scallop_mm < 0.02, "{}", f.max_scallop_mm);
+        assert_eq!(f.uncovered_samples, 0);
+        assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
     }
 }

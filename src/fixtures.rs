@@ -471,11 +471,11 @@ pub fn cylinder(radius: f64, height: f64, segments: usize, stacks: usize) -> Tri
 // Building blocks
 // ---------------------------------------------------------------------------------------------
 
-/// Tiny deterministic generator (SplitMix64), for jitter only.
-struct SplitMix64(u64);
+/// Tiny deterministic generator (SplitMix64): the fixtures' jitter and the verifier's samples.
+pub(crate) struct SplitMix64(pub(crate) u64);
 
 impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
+    pub(crate) fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -484,7 +484,7 @@ impl SplitMix64 {
     }
 
     /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
