@@ -12,14 +12,18 @@
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
+//! | contact points → ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
+//! | posts: LinuxCNC, GRBL, 5-axis A/C, APT CL data | [`gcode`] | implemented |
 
 pub mod bench;
 pub mod fixtures;
 pub mod flatten;
+pub mod gcode;
 pub mod linalg;
 pub mod mesh;
 pub mod num;
 pub mod slitmap;
+pub mod toolpath;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
