@@ -243,7 +243,7 @@ fn part_name_and_header_cannot_break_a_comment() {
             assert!(a.active_comments.is_empty(), "{p}: {:?}", a.active_comments);
         }
     }
-    assert_eq!(sanitize_comment(evil, 64), "evil] G0 Z-50 [ , M30 na?ve ? ??? SS");
+    assert_eq!(sanitize_comment(evil, 64), "evil] G0 Z-50 [ , M30 na?ve ? ?? SS");
 }
 
 fn axis_deg(a: f64, c: f64) -> DVec3 {

@@ -163,7 +163,7 @@ fn lead_in_and_out_stay_above_the_surface_ends() {
             let (first, last) = (contacts[0].tip, contacts[contacts.len() - 1].tip);
             let up = DVec3::Z; // the +Z tool axis (3-axis) and the 5-axis height direction
             let approach: Vec<_> = tp.moves.iter().filter(|m| m.kind == MoveKind::Approach).collect();
-            assert_eq!(approach.len(), 1 + 16 + 1, "descent, 16 arc segments (the last ends at the first tip)");
+            assert_eq!(approach.len(), 1 + 16, "descent + 16 arc segments (the last ends at the first tip)");
             for m in &approach {
                 assert!(m.tip.dot(up) >= first.dot(up) - 1e-12, "case {k}: lead-in below the first tip");
             }
@@ -184,7 +184,7 @@ fn lead_in_and_out_stay_above_the_surface_ends() {
             if cut_dir.z <= 0.0 && cut_dir.z > -0.7 {
                 assert!(arc_end.angle_between(cut_dir).to_degrees() < 2.9, "case {k}: lead-in not tangent");
             }
-            let arc: f64 = approach[1..].windows(2).map(|w| w[0].tip.distance(w[1].tip)).sum();
+            let arc: f64 = approach.windows(2).map(|w| w[0].tip.distance(w[1].tip)).sum();
             assert!((arc - 2.0 * o.radius_mm).abs() < 0.01, "lead-in length {arc}");
             // Safe height default: 10 mm above the highest feed move or contact point.
             let feeds = tp.moves.iter().filter(|m| !m.kind.is_rapid()).map(|m| m.tip.z);

@@ -26,7 +26,8 @@
 //! G-code words that did not change are skipped (modal `G0`/`G1`, `F`, unchanged coordinates at
 //! the output precision); a move that changes nothing at that precision is dropped, so no empty
 //! move line is ever written. Coordinates have `decimals` decimals, A C too, CL direction
-//! cosines `decimals + 2`; `-0.0000` is written `0.0000`.
+//! cosines `decimals + 2`, feeds (mm/min) and spindle speeds 1 decimal; `-0.0000` is written
+//! `0.0000`.
 //!
 //! Comments. Everything the caller gives (part name, header keys and values) is sanitised by
 //! [`sanitize_comment`]: no parentheses, semicolons, `$`, control characters or non-ASCII can
@@ -240,7 +241,7 @@ fn header_lines(toolpath: &Toolpath, options: &GcodeOptions, f: &Fmt) -> Vec<Str
             tool.number,
             f.num(2.0 * tool.radius_mm),
             f.num(tool.radius_mm),
-            f.num(tool.spindle_rpm)
+            f.with(tool.spindle_rpm, 1)
         ),
     ];
     for (k, v) in &options.header {

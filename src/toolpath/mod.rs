@@ -30,7 +30,11 @@
 //!    ([`MoveKind::LeadOut`], at the feed);
 //! 5. retracts (rapid) to the safe height ([`MoveKind::Retract`]).
 //!
-//! The tool axis is held during the lead-in (first axis) and the lead-out (last axis).
+//! The tool axis is held during the lead-in (first axis) and the lead-out (last axis), so the
+//! ball centre follows the same arc as the tip. The leads do not look at the surface: the arc
+//! (radius 2·lead_in_mm/π, rising s²/(2·radius) at a distance s from the contact) clears it
+//! when the surface behind the start (ahead of the end) curves away or rises more slowly, as it
+//! does along the tangent of a spiral's outer ring on parts a ball of this radius can finish.
 //!
 //! Preconditions (each fault is a [`ToolpathError`] naming the field or point index): at least
 //! two points, as many normals as points, finite coordinates, normals of length 1 ± 1e-3
@@ -338,10 +342,14 @@ struct Checked {
     rapid: f64,
     clearance: f64,
     lead_in: f64,
-    /// Fixed tool axis (3-axis) or None (5-axis: (cos β cos γ, sin β, cos β sin γ)).
-    fixed_axis: Option<DVec3>,
-    five: (f64, f64, f64),
+    rule: AxisRule,
     up: DVec3,
+}
+
+enum AxisRule {
+    Fixed(DVec3),
+    /// The coefficients of n, t, b: (cos β cos γ, sin β, cos β sin γ).
+    Lead(f64, f64, f64),
 }
 
 impl Checked {
@@ -372,13 +380,13 @@ impl Checked {
                 expected: "a tool number ≥ 1",
             });
         }
-        let (fixed_axis, five, up) = match o.axes {
+        let (rule, up) = match o.axes {
             Axes::Three { axis } => {
                 let len = axis.length();
                 if !(len > 1e-12 && len.is_finite()) {
                     return Err(ToolpathError::InvalidToolAxis { x: axis.x, y: axis.y, z: axis.z });
                 }
-                (Some(axis / len), (1.0, 0.0, 0.0), axis / len)
+                (AxisRule::Fixed(axis / len), axis / len)
             }
             Axes::Five { lead_deg, tilt_deg } => {
                 let angle = |field: &'static str, value: f64| {
@@ -390,10 +398,10 @@ impl Checked {
                 };
                 let (sb, cb) = num::sin_cos(angle("lead_deg", lead_deg)?);
                 let (sg, cg) = num::sin_cos(angle("tilt_deg", tilt_deg)?);
-                (None, (cb * cg, sb, cb * sg), DVec3::Z)
+                (AxisRule::Lead(cb * cg, sb, cb * sg), DVec3::Z)
             }
         };
-        Ok(Checked { radius, feed, plunge, rapid, clearance, lead_in, fixed_axis, five, up })
+        Ok(Checked { radius, feed, plunge, rapid, clearance, lead_in, rule, up })
     }
 }
 
@@ -421,16 +429,18 @@ fn check_points(cc: &[DVec3], normals: &[DVec3]) -> Result<Vec<DVec3>, ToolpathE
 
 /// The tool axis at every contact point (module docs).
 fn tool_axes(cc: &[DVec3], n: &[DVec3], o: &Checked) -> Result<Vec<DVec3>, ToolpathError> {
-    if let Some(axis) = o.fixed_axis {
-        for (i, &nn) in n.iter().enumerate() {
-            let dot = nn.dot(axis);
-            if dot < -1e-12 {
-                return Err(ToolpathError::Undercut { index: i, dot });
+    let (cn, ct, cb) = match o.rule {
+        AxisRule::Fixed(axis) => {
+            for (i, &nn) in n.iter().enumerate() {
+                let dot = nn.dot(axis);
+                if dot < -1e-12 {
+                    return Err(ToolpathError::Undercut { index: i, dot });
+                }
             }
+            return Ok(vec![axis; cc.len()]);
         }
-        return Ok(vec![axis; cc.len()]);
-    }
-    let (cn, ct, cb) = o.five;
+        AxisRule::Lead(cn, ct, cb) => (cn, ct, cb),
+    };
     let last = cc.len() - 1;
     (0..cc.len())
         .map(|i| {
