@@ -468,6 +468,79 @@ pub fn cylinder(radius: f64, height: f64, segments: usize, stacks: usize) -> Tri
 }
 
 // ---------------------------------------------------------------------------------------------
+// Cutter-contact paths on analytic surfaces (toolpath and post-processor tests)
+// ---------------------------------------------------------------------------------------------
+
+/// An analytic surface with an exact normal, for synthetic cutter-contact paths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactSurface {
+    /// The convex cap of [`spherical_cap_hole`]: sphere radius 60 mm centred on the −Z axis so
+    /// that the base circle of radius 40 mm lies in z = 0.
+    SphericalCap,
+    /// The saddle of [`saddle_2_holes`]: z = (x² − y²)/(2·125).
+    Saddle,
+}
+
+impl ContactSurface {
+    /// The point of the surface above (x, y) and its unit normal (upwards, towards the tool).
+    pub fn point_normal(self, q: DVec2) -> (DVec3, DVec3) {
+        match self {
+            ContactSurface::SphericalCap => {
+                let z0 = (CAP_SPHERE_R * CAP_SPHERE_R - CAP_BASE_R * CAP_BASE_R).sqrt();
+                let zs = (CAP_SPHERE_R * CAP_SPHERE_R - q.length_squared()).max(0.0).sqrt();
+                let p = DVec3::new(q.x, q.y, zs - z0);
+                (p, DVec3::new(q.x, q.y, zs) / CAP_SPHERE_R)
+            }
+            ContactSurface::Saddle => {
+                let p = DVec3::new(q.x, q.y, (q.x * q.x - q.y * q.y) / (2.0 * SADDLE_C));
+                (p, DVec3::new(-q.x / SADDLE_C, q.y / SADDLE_C, 1.0).normalize())
+            }
+        }
+    }
+
+    /// The centre of the sphere (for [`ContactSurface::SphericalCap`]), whose offset by the ball
+    /// radius is an exact oracle for ball centres.
+    pub fn sphere_centre_and_radius() -> (DVec3, f64) {
+        let z0 = (CAP_SPHERE_R * CAP_SPHERE_R - CAP_BASE_R * CAP_BASE_R).sqrt();
+        (DVec3::new(0.0, 0.0, -z0), CAP_SPHERE_R)
+    }
+}
+
+/// Cutter-contact points and exact unit normals along one continuous pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactPath {
+    pub cc: Vec<DVec3>,
+    pub normals: Vec<DVec3>,
+}
+
+/// An Archimedean spiral in projection, counter-clockwise from radius `r_outer` inwards to
+/// `r_inner` (mm) with `pitch` mm per turn, sampled every ≈ `step` mm of projected arc length,
+/// lifted onto `surface` with its exact normals: a stand-in for the spiral stage's output.
+///
+/// Deterministic (no randomness); consecutive points are distinct. Requires
+/// 0 < r_inner < r_outer, pitch > 0 and step > 0.
+pub fn contact_spiral(surface: ContactSurface, r_outer: f64, r_inner: f64, pitch: f64, step: f64) -> ContactPath {
+    assert!(
+        r_inner > 0.0 && r_outer > r_inner && pitch > 0.0 && step > 0.0,
+        "contact_spiral needs 0 < r_inner < r_outer, pitch > 0 and step > 0"
+    );
+    let (mut cc, mut normals) = (Vec::new(), Vec::new());
+    let mut theta = 0.0_f64;
+    loop {
+        let r = (r_outer - pitch * theta / TAU).max(r_inner);
+        let (s, c) = crate::num::sin_cos(theta);
+        let (p, n) = surface.point_normal(DVec2::new(r * c, r * s));
+        cc.push(p);
+        normals.push(n);
+        if r <= r_inner {
+            break;
+        }
+        theta += step / r;
+    }
+    ContactPath { cc, normals }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Building blocks
 // ---------------------------------------------------------------------------------------------
 

@@ -14,6 +14,8 @@
 //! | optimal pole: scallop-uniformity energy E_min and its minimisation | [`origin`] | implemented |
 //! | ring radii with the scallop height under control | [`spacing`] | implemented |
 //! | rings bridged into one spiral around the holes | [`spiral`] | implemented |
+//! | ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
+//! | G-code posts (LinuxCNC, GRBL, A/C 5-axis) and CL data | [`gcode`] | implemented |
 //! | scallop simulation of the final path | [`verify`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 //! | deterministic transcendental functions | [`num`] | implemented |
@@ -21,6 +23,7 @@
 pub mod bench;
 pub mod fixtures;
 pub mod flatten;
+pub mod gcode;
 pub mod linalg;
 pub mod mesh;
 pub mod num;
@@ -28,6 +31,7 @@ pub mod origin;
 pub mod slitmap;
 pub mod spacing;
 pub mod spiral;
+pub mod toolpath;
 pub mod verify;
 
 #[cfg(target_arch = "wasm32")]
