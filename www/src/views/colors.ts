@@ -10,12 +10,13 @@ function ramp(stops: Rgb[], t: number): Rgb {
   return lerp(stops[i]!, stops[i + 1]!, x - i);
 }
 
-/** Along the path: start (deep blue) → end (amber), so the direction of travel reads at a glance. */
+/** Along the path: start (deep blue) → teal → purple → end (near black): the direction of travel reads at a glance. */
+// Dark tones: the path must stand out on the light part and on the heat map alike.
 const PATH: Rgb[] = [
-  [0.15, 0.2, 0.75],
-  [0.1, 0.6, 0.85],
-  [0.2, 0.75, 0.45],
-  [0.95, 0.7, 0.1],
+  [0.05, 0.15, 0.6],
+  [0.0, 0.42, 0.55],
+  [0.38, 0.12, 0.55],
+  [0.08, 0.06, 0.1],
 ];
 export const pathColour = (t: number): Rgb => ramp(PATH, t);
 
