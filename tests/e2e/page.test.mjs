@@ -127,6 +127,15 @@ describe("the planner page", { concurrency: false }, () => {
     await shot("5-recovered.png");
   });
 
+  it("cancels a long plan and stays usable", async () => {
+    await page.getByTestId("opt-samples").fill("3000000"); // a slow verification
+    await page.getByTestId("cancel").waitFor({ state: "visible", timeout: 10_000 });
+    await page.getByTestId("cancel").click();
+    assert.equal(await settled(), "cancelled");
+    const state = await replan(() => page.getByTestId("opt-samples").fill("100000"));
+    assert.equal(state, "planned");
+  });
+
   it("sets the pole by a click in the flattened domain and shows its energy", async () => {
     const box = await page.getByTestId("view-2d").boundingBox();
     const state = await replan(() => page.getByTestId("view-2d").click({ position: { x: box.width * 0.25, y: box.height * 0.55 } }));

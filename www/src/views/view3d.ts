@@ -148,14 +148,14 @@ export class View3d {
     return new THREE.Line(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
   }
 
-  /** A needle along the tool axis from the tip at every k-th move (at most ~600 needles). */
+  /** A needle along the tool axis from the tip at every k-th move (at most ~400 needles). */
   private makeNeedles(tips: Float64Array, axes: Float64Array, radius: number): THREE.LineSegments {
     const moves = tips.length / 3;
-    const step = Math.max(1, Math.ceil(moves / 600));
+    const step = Math.max(1, Math.ceil(moves / 400));
     const points: number[] = [];
     for (let m = 0; m < moves; m += step) {
       const [x, y, z] = [tips[3 * m]!, tips[3 * m + 1]!, tips[3 * m + 2]!];
-      points.push(x, y, z, x + 4 * radius * axes[3 * m]!, y + 4 * radius * axes[3 * m + 1]!, z + 4 * radius * axes[3 * m + 2]!);
+      points.push(x, y, z, x + 3 * radius * axes[3 * m]!, y + 3 * radius * axes[3 * m + 1]!, z + 3 * radius * axes[3 * m + 2]!);
     }
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(points), 3));
@@ -208,7 +208,7 @@ export class View3d {
     this.requestRender();
   }
 
-  requestRender(): void {
+  private requestRender(): void {
     if (this.frame !== 0) return;
     this.frame = requestAnimationFrame(() => {
       this.frame = 0;

@@ -1,0 +1,14 @@
+import { launch, serve, root } from "./harness.mjs";
+import { join } from "node:path";
+const server = await serve(join(root, "www/dist"));
+const b = await launch();
+const page = await b.context.newPage();
+page.on("pageerror", (e) => console.log("pageerror:", e.message));
+await page.goto(server.url + "?axes=5&scallop=0.01");
+await page.waitForFunction(() => document.querySelector("[data-testid=status]").textContent === "planned", undefined, { timeout: 30000 });
+const box = await page.getByTestId("view-2d").boundingBox();
+await page.mouse.move(box.x + box.width * 0.7, box.y + box.height * 0.4);
+await page.waitForTimeout(300);
+console.log("scrub:", await page.getByTestId("scrub").inputValue(), await page.locator("#scrub-label").textContent());
+await page.screenshot({ path: "/tmp/shot2.png", clip: { x: 300, y: 0, width: 1100, height: 1000 } });
+await b.close(); server.close();
