@@ -1,5 +1,6 @@
 // The page: load a part (sample, file picker, drop), plan it in the worker whenever an option
-// changes, and show the plan in the 3D and 2D views, the metrics panel and the downloads.
+// changes, and show the plan in the 3D and 2D views (linked: hovering either, or the scrub bar,
+// moves the tool and the markers together), the metrics panel and the downloads.
 // The status line reads `planned` when a plan is shown and `error: <message>` after a failure;
 // a failure never removes the last good plan.
 
@@ -186,7 +187,7 @@ form.onInvalid = (text) => setStatus(`error: ${text}`, `Not planned.${lastGood()
 optionsChanged(options, false);
 window.clearTimeout(replanTimer); // the first plan follows the first load
 
-view2d.onCursor = (index) => {
+view2d.onCursor = view3d.onCursor = (index) => {
   scrub.value = String(index);
   setCursor(index);
 };

@@ -27,8 +27,14 @@ export class View3d {
   private plan: PlanResult | null = null;
   /** Scallop limit h the heat map is scaled to, mm. */
   private limit = 0.02;
+  /** Ball radius of the plan shown, mm. */
+  private radius = 3;
   private layers: View3dLayers = { heatMap: true, path: true, needles: true };
   private frame = 0;
+  private readonly raycaster = new THREE.Raycaster();
+
+  /** Hover over the path: the index of the path point under the pointer. */
+  onCursor: (index: number) => void = () => {};
 
   constructor(private readonly canvas: HTMLCanvasElement) {
     // preserveDrawingBuffer: the tests (and screenshots) read the pixels back.
@@ -46,8 +52,24 @@ export class View3d {
     this.scene.add(this.camera, this.content);
     this.tool.visible = false;
     this.scene.add(this.tool);
+    canvas.addEventListener("pointermove", (event) => {
+      if (event.buttons === 0) this.hover(event);
+    });
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
+  }
+
+  /** The path point under the pointer (a pick within about one tool radius of the line). */
+  private hover(event: PointerEvent): void {
+    if (this.path === null || !this.path.visible || this.plan === null) return;
+    const rect = this.canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
+    this.raycaster.setFromCamera(ndc, this.camera);
+    this.raycaster.params.Line = { threshold: this.radius };
+    const hit = this.raycaster.intersectObject(this.path)[0];
+    if (hit?.index === undefined) return;
+    this.setCursor(hit.index);
+    this.onCursor(hit.index);
   }
 
   /** Shows a newly loaded part (and forgets the previous plan). */
@@ -78,6 +100,7 @@ export class View3d {
   setPlan(plan: PlanResult, radiusMm: number, scallopMm: number, fiveAxis: boolean): void {
     this.plan = plan;
     this.limit = scallopMm;
+    this.radius = radiusMm;
     this.disposeObject(this.path);
     this.disposeObject(this.needles);
     this.path = this.needles = null;
