@@ -70,7 +70,8 @@ step "set-up (scripts/setup.sh)" bash scripts/setup.sh
 if [ $? -ne 0 ]; then
   for s in "rustfmt" "clippy (native, all targets)" "clippy (wasm32 library)" "cargo test (native, release)" \
     "wasm facade in headless Chromium" "wasm package for the page" "sample part (CLI: slitpath fixture)" \
-    "page type check (tsc)" "page build (vite)" "page in headless Chromium (sample, report, errors)"; do
+    "page type check (tsc)" "page build (vite)" "npm package for portals (vite library + types)" \
+    "page and package in headless Chromium (Playwright)"; do
     skip "$s" "the set-up failed"
   done
   summary
@@ -93,15 +94,19 @@ if [ $wasm_ok -eq 0 ]; then
   step "page type check (tsc)" tsc --noEmit -p www
   step "page build (vite)" vite build www --logLevel warn
   build_ok=$?
+  step "npm package for portals (vite library + types)" npm run --silent build:lib
+  lib_ok=$?
 else
-  skip "page type check (tsc)" "the wasm package did not build"
-  skip "page build (vite)" "the wasm package did not build"
-  build_ok=1
+  for s in "page type check (tsc)" "page build (vite)" "npm package for portals (vite library + types)"; do
+    skip "$s" "the wasm package did not build"
+  done
+  build_ok=1 lib_ok=1
 fi
-if [ $build_ok -eq 0 ] && [ $sample_ok -eq 0 ]; then
-  step "page in headless Chromium (sample, report, errors)" node scripts/page-check.mjs
+# Playwright (playwright-core) drives Debian's /usr/bin/chromium; screenshots go to test-output/.
+if [ $build_ok -eq 0 ] && [ $lib_ok -eq 0 ] && [ $sample_ok -eq 0 ]; then
+  step "page and package in headless Chromium (Playwright)" node --test --test-concurrency=1 --test-reporter=spec tests/e2e/page.test.mjs tests/e2e/library.test.mjs
 else
-  skip "page in headless Chromium (sample, report, errors)" "the page or the sample part did not build"
+  skip "page and package in headless Chromium (Playwright)" "the page, the package or the sample part did not build"
 fi
 
 summary

@@ -17,6 +17,7 @@ export interface MeshOptions {
 }
 
 export type Vec3 = [number, number, number];
+export type Vec2 = [number, number];
 
 /** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
 export interface MeshReport {
@@ -50,6 +51,101 @@ export interface SurfaceMesh {
   triangles: Uint32Array;
 }
 
+/** Where the spiral is centred: see the CLI's `--origin`. */
+export type OriginOption =
+  | "auto"
+  | "centroid"
+  | `hole:${number}`
+  /** A pole in the flattened plane. */
+  | { x: number; y: number }
+  /** A 3D point near the surface. */
+  | { x: number; y: number; z: number };
+
+/** Options of one plan; every field optional, defaults equal the CLI's. Unknown fields are an error. */
+export interface PlanOptions {
+  radiusMm?: number;
+  scallopMm?: number;
+  axes?: 3 | 5;
+  leadDeg?: number;
+  tiltDeg?: number;
+  direction?: "inward" | "outward";
+  cut?: "climb" | "conventional";
+  origin?: OriginOption;
+  post?: "linuxcnc" | "grbl" | "ac" | "cl";
+  feedMmMin?: number;
+  plungeFeedMmMin?: number;
+  spindleRpm?: number;
+  /** `null`: automatic. */
+  safeZMm?: number | null;
+  verifySamples?: number;
+}
+
+/** The plan report: the CLI's `--report` JSON. */
+export interface PlanReport {
+  options: Record<string, unknown>;
+  mesh: MeshReport;
+  origin: {
+    mode: string;
+    pole_uv: Vec2;
+    pole_3d: Vec3;
+    e_min: number;
+    e_min_centroid: number;
+    uniformity: number;
+    evaluations: number;
+  };
+  rings: unknown;
+  path: { length_mm: number; points: number; retractions: number; max_turn_deg: number; rho2: number; time_min: number };
+  verify: {
+    max_scallop_mm: number;
+    mean_scallop_mm: number;
+    p95_scallop_mm: number;
+    p99_scallop_mm: number;
+    v_max_mm2: number;
+    uncovered_fraction: number;
+    gouges: number;
+    ct2: number;
+    max_ct: number;
+  };
+  gouge_risk_area_mm2: number;
+  timings_ms: Record<string, number>;
+}
+
+/** Everything a plan produces, as plain data and typed arrays. */
+export interface PlanOutput {
+  report: PlanReport;
+  gcode: string;
+  /** Slit-map image w per vertex (re, im) for the chosen pole. */
+  w: Float64Array;
+  /** |w| of each ring. */
+  ringRadii: Float64Array;
+  /** xyz per path point (cutter contact). */
+  pathContacts: Float64Array;
+  /** w (re, im) per path point. */
+  pathW: Float64Array;
+  /** xyz tool tip per toolpath move (incl. lead-in/out). */
+  pathTips: Float64Array;
+  /** Unit tool axis per toolpath move. */
+  pathAxes: Float64Array;
+  /** Scallop height (mm) per surface vertex, NaN where uncovered. */
+  vertexScallop: Float64Array;
+}
+
+export type ProgressCallback = (stage: string, done: number, total: number) => void;
+
+/** The planning methods the facade adds to `Planner` (typed here so the page builds with either core). */
+interface PlanningMethods {
+  plan(options: object, onProgress?: ProgressCallback): unknown;
+  planW(): Float64Array;
+  ringRadii(): Float64Array;
+  pathContacts(): Float64Array;
+  pathW(): Float64Array;
+  pathTips(): Float64Array;
+  pathAxes(): Float64Array;
+  vertexScallop(): Float64Array;
+  gcode(): string;
+  energy(x: number, y: number): number;
+}
+
 let ready: Promise<void> | undefined;
 
 /** Instantiates the wasm module once; later calls share the same promise. */
@@ -79,6 +175,48 @@ export class Part {
 
   surface(): SurfaceMesh {
     return { positions: this.planner.positions(), triangles: this.planner.triangles() };
+  }
+
+  /** Flattened uv per vertex; throws for a surface that cannot be planned. */
+  flattened(): Float64Array {
+    return this.planner.flattened();
+  }
+
+  /** The slit-map image w per vertex for a pole (x, y) of the flattened plane. */
+  slitMap(x: number, y: number): Float64Array {
+    return this.planner.slitMap(x, y);
+  }
+
+  /** Whether this build of the core has the planning methods. */
+  canPlan(): boolean {
+    return typeof (this.planner as unknown as Partial<PlanningMethods>).plan === "function";
+  }
+
+  private planning(): PlanningMethods {
+    if (!this.canPlan()) throw new Error("this build of the core cannot plan yet (it only flattens and maps)");
+    return this.planner as unknown as PlanningMethods;
+  }
+
+  /** Plans with `options`; throws an Error with a readable message. */
+  plan(options: PlanOptions, onProgress?: ProgressCallback): PlanOutput {
+    const p = this.planning();
+    const report = p.plan(options, onProgress) as PlanReport;
+    return {
+      report,
+      gcode: p.gcode(),
+      w: p.planW(),
+      ringRadii: p.ringRadii(),
+      pathContacts: p.pathContacts(),
+      pathW: p.pathW(),
+      pathTips: p.pathTips(),
+      pathAxes: p.pathAxes(),
+      vertexScallop: p.vertexScallop(),
+    };
+  }
+
+  /** E_min for a pole (x, y) of the flattened plane. */
+  energy(x: number, y: number): number {
+    return this.planning().energy(x, y);
   }
 
   free(): void {

@@ -1,105 +1,262 @@
-// The page: pick, drop or fetch an STL, hand the bytes to the planner worker, show the report.
-// Later issues add the 3D view of the surface and the 2D view of the slit map beside the report.
+// The page: load a part (sample, file picker, drop), plan it in the worker whenever an option
+// changes, and show the plan in the 3D and 2D views (linked: hovering either, or the scrub bar,
+// moves the tool and the markers together), the metrics panel and the downloads.
+// The status line reads `planned` when a plan is shown and `error: <message>` after a failure;
+// a failure never removes the last good plan.
 
 import "./style.css";
-import { PlannerClient } from "./planner-client";
+import { CancelledError, SlitpathPlanner, type LoadedPart, type PlanResult } from "./lib/index";
+import type { FullPlanOptions } from "./lib/defaults";
+import { cliArguments, initialOptions, persist } from "./options";
+import { byId } from "./ui/dom";
+import { renderMetrics, renderNoPlan } from "./ui/metrics";
+import { OptionsForm } from "./ui/options-form";
 import { renderReport } from "./ui/report";
+import { readWithProgress, saveText } from "./ui/files";
+import { heatGradientCss } from "./views/colors";
+import { View2d } from "./views/view2d";
+import { View3d } from "./views/view3d";
 
-const SAMPLE_URL = "samples/freeform_4_holes.stl";
+const SAMPLE = "freeform_4_holes.stl";
+const SAMPLE_URL = `samples/${SAMPLE}`;
+const REPLAN_DELAY_MS = 350;
 
-function byId<T extends HTMLElement>(id: string): T {
-  const node = document.getElementById(id);
-  if (node === null) throw new Error(`the page has no #${id}`);
-  return node as T;
-}
-
-const input = byId<HTMLInputElement>("stl-input");
-const sampleButton = byId<HTMLButtonElement>("load-sample");
-const errorBox = byId<HTMLSpanElement>("error");
 const statusBox = byId<HTMLParagraphElement>("status");
-const reportBox = byId<HTMLDivElement>("report");
-const overlay = byId<HTMLDivElement>("drop-overlay");
-const versionBox = document.querySelector<HTMLElement>("[data-testid=version]");
+const detailBox = byId<HTMLParagraphElement>("status-detail");
+const progressRow = byId<HTMLDivElement>("progress-row");
+const progress = byId<HTMLProgressElement>("progress");
+const scrub = byId<HTMLInputElement>("scrub");
+const scrubLabel = byId<HTMLSpanElement>("scrub-label");
+const energyBox = byId<HTMLSpanElement>("energy");
+const metricsBox = byId<HTMLDivElement>("metrics");
+const legend = byId<HTMLDivElement>("legend");
+const downloadGcode = byId<HTMLButtonElement>("download-gcode");
+const downloadCl = byId<HTMLButtonElement>("download-cl");
+const layerHeat = byId<HTMLInputElement>("layer-heat");
+const layerPath = byId<HTMLInputElement>("layer-path");
+const layerNeedles = byId<HTMLInputElement>("layer-needles");
 
-const planner = new PlannerClient();
-planner.onReady = (version) => {
-  if (versionBox) versionBox.textContent = `core ${version}`;
-};
-planner.onFailure = (message) => showError(message);
+const planner = new SlitpathPlanner();
+const view3d = new View3d(byId<HTMLCanvasElement>("view-3d"));
+const view2d = new View2d(byId<HTMLCanvasElement>("view-2d"));
+let options: FullPlanOptions = initialOptions();
+const form = new OptionsForm(byId("options"), options);
 
-function setStatus(text: string): void {
-  statusBox.textContent = text;
-}
-
-function showError(message: string): void {
-  errorBox.textContent = `error: ${message}`;
-  errorBox.hidden = false;
-}
-
-function clearError(): void {
-  errorBox.textContent = "";
-  errorBox.hidden = true;
-}
-
-function kilobytes(bytes: number): string {
-  return bytes < 1024 * 1024 ? `${(bytes / 1024).toFixed(1)} kB` : `${(bytes / 1024 / 1024).toFixed(1)} MB`;
-}
-
+/** The part shown (its generation changes with every load) and the last good plan of it. */
+let part: { loaded: LoadedPart; generation: number } | null = null;
+let shown: { plan: PlanResult; options: FullPlanOptions } | null = null;
 let generation = 0;
+let planning = false;
+let replanWanted = false;
+let replanTimer = 0;
 
-/** Loads one STL; a later load supersedes an earlier one still in flight. */
-async function loadStl(name: string, bytes: Promise<ArrayBuffer>): Promise<void> {
-  const mine = ++generation;
-  clearError();
-  document.body.classList.add("busy");
-  setStatus(`Loading ${name}…`);
+planner.version().then((v) => ((document.querySelector<HTMLElement>("[data-testid=version]")!).textContent = `core ${v}`));
+planner.onFailure = (message) => setStatus(`error: ${message}`);
+
+function setStatus(status: string, detail = ""): void {
+  statusBox.textContent = status;
+  statusBox.classList.toggle("is-error", status.startsWith("error:"));
+  detailBox.textContent = detail;
+}
+
+function showProgress(label: string, fraction: number | null): void {
+  progressRow.hidden = false;
+  if (fraction === null) progress.removeAttribute("value");
+  else progress.value = fraction;
+  detailBox.textContent = label;
+}
+
+function hideProgress(): void {
+  progressRow.hidden = true;
+}
+
+function message(error: unknown): string {
+  return error instanceof Error ? error.message : String(error);
+}
+
+function lastGood(): string {
+  return shown ? " The last good plan is still shown." : "";
+}
+
+async function loadStl(name: string, read: (onProgress: (fraction: number) => void) => Promise<ArrayBuffer>): Promise<void> {
+  setStatus("loading", `reading ${name}`);
+  showProgress(`reading ${name}`, 0);
   try {
-    const buffer = await bytes;
-    setStatus(`Reading ${name} (${kilobytes(buffer.byteLength)})…`);
-    const part = await planner.load(name, buffer);
-    if (mine !== generation) return;
-    renderReport(reportBox, part.report, name);
-    const surface = part.report.machined ?? part.report;
-    setStatus(
-      `Loaded ${name}: ${surface.faces.toLocaleString("en-US")} faces to machine, ` +
-        `${surface.boundary_loops} boundary loops, in ${Math.round(part.ms)} ms.`,
-    );
+    const bytes = await read((fraction) => showProgress(`reading ${name}`, fraction));
+    showProgress(`checking and flattening ${name}`, null);
+    const loaded = await planner.load(bytes, { name });
+    part = { loaded, generation: ++generation };
+    shown = null;
+    byId("part-name").textContent = `${name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces`;
+    renderReport(byId("report"), loaded.report, name);
+    view3d.setPart(loaded);
+    view2d.setPart(loaded);
+    form.setHoles(Math.max(0, loaded.loops.length - 1));
+    renderNoPlan(metricsBox, "Planning…");
+    setOutputs();
+    void plan();
   } catch (error) {
-    if (mine !== generation) return;
-    showError(error instanceof Error ? error.message : String(error));
-    setStatus(`Could not load ${name}.`);
-  } finally {
-    if (mine === generation) document.body.classList.remove("busy");
+    hideProgress();
+    if (error instanceof CancelledError) return setStatus("cancelled", `loading ${name} was cancelled.`);
+    setStatus(`error: ${message(error)}`, `${name} was not loaded.${lastGood()}`);
   }
 }
 
-async function fetchSample(): Promise<ArrayBuffer> {
+/** Plans the shown part with the current options; an edit during a plan re-plans right after. */
+async function plan(): Promise<void> {
+  window.clearTimeout(replanTimer);
+  if (part === null) return;
+  if (planning) {
+    replanWanted = true;
+    return;
+  }
+  planning = true;
+  const mine = part;
+  const planned = { ...options };
+  setStatus("planning", "");
+  showProgress("planning", null);
+  try {
+    const result = await planner.plan(planned, {
+      onProgress: (stage, done, total) => showProgress(`${stage} ${done}/${total}`, total > 0 ? done / total : null),
+    });
+    if (part?.generation === mine.generation) show(result, planned);
+  } catch (error) {
+    if (error instanceof CancelledError) setStatus("cancelled", `Planning was cancelled.${lastGood()}`);
+    else setStatus(`error: ${message(error)}`, `Not planned.${lastGood()}`);
+    if (shown === null) renderNoPlan(metricsBox, "No plan: see the message beside the part.");
+  } finally {
+    planning = false;
+    hideProgress();
+    if (replanWanted) {
+      replanWanted = false;
+      void plan();
+    }
+  }
+}
+
+function show(result: PlanResult, planned: FullPlanOptions): void {
+  shown = { plan: result, options: planned };
+  view3d.setPlan(result, planned.radiusMm, planned.scallopMm, planned.axes === 5);
+  view2d.setPlan(result);
+  view2d.setPicked(typeof planned.origin === "object" && !("z" in planned.origin) ? [planned.origin.x, planned.origin.y] : null);
+  renderMetrics(metricsBox, result, planned.scallopMm);
+  const points = result.pathContacts.length / 3;
+  scrub.max = String(Math.max(0, points - 1));
+  scrub.value = "0";
+  scrub.disabled = points === 0;
+  setCursor(0);
+  byId("legend-max").textContent = `h = ${planned.scallopMm} mm`;
+  legend.hidden = !layerHeat.checked;
+  setOutputs();
+  const { path } = result.report;
+  const name = part?.loaded.name ?? "";
+  setStatus("planned", `${name}: ${result.ringRadii.length} rings, ${path.length_mm.toFixed(0)} mm, ${path.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
+}
+
+function setOutputs(): void {
+  downloadGcode.disabled = downloadCl.disabled = shown === null;
+  const post = shown?.options.post ?? options.post;
+  downloadGcode.textContent = post === "cl" ? "Download CL data" : `Download G-code (${post})`;
+}
+
+function setCursor(index: number): void {
+  const points = Number(scrub.max) + 1;
+  scrubLabel.textContent = shown ? `point ${index + 1} of ${points}` : "";
+  view3d.setCursor(index);
+  view2d.setCursor(index);
+}
+
+function optionsChanged(next: FullPlanOptions, now = false): void {
+  options = next;
+  persist(options);
+  byId("cli-command").textContent = `slitpath plan PART.stl ${cliArguments(options).join(" ")}`;
+  window.clearTimeout(replanTimer);
+  if (now) void plan();
+  else replanTimer = window.setTimeout(() => void plan(), REPLAN_DELAY_MS);
+}
+
+/** `part.stl` → `part.ngc` (LinuxCNC, AC), `part.nc` (GRBL), `part.cls` (CL data). */
+function outputName(post: FullPlanOptions["post"]): string {
+  const base = (part?.loaded.name ?? "part.stl").replace(/\.stl$/i, "") || "part";
+  const ext = { linuxcnc: "ngc", grbl: "nc", ac: "ngc", cl: "cls" }[post];
+  return `${base}.${ext}`;
+}
+
+form.onChange = (next) => optionsChanged(next);
+form.onInvalid = (text) => setStatus(`error: ${text}`, `Not planned.${lastGood()}`);
+optionsChanged(options, false);
+window.clearTimeout(replanTimer); // the first plan follows the first load
+
+view2d.onCursor = view3d.onCursor = (index) => {
+  scrub.value = String(index);
+  setCursor(index);
+};
+view2d.onPick = (x, y) => {
+  const next = { ...options, origin: { x, y } };
+  form.set(next);
+  energyBox.textContent = "E_min at the picked pole: …";
+  planner.energy(x, y).then(
+    (e) => (energyBox.textContent = `E_min at the picked pole: ${e.toPrecision(4)}`),
+    (error: unknown) => {
+      if (!(error instanceof CancelledError)) energyBox.textContent = `E_min: ${message(error)}`;
+    },
+  );
+  optionsChanged(next, true);
+};
+scrub.addEventListener("input", () => setCursor(Number(scrub.value)));
+
+const layers = () => view3d.setLayers({ heatMap: layerHeat.checked, path: layerPath.checked, needles: layerNeedles.checked });
+for (const box of [layerHeat, layerPath, layerNeedles]) box.addEventListener("change", layers);
+layerHeat.addEventListener("change", () => (legend.hidden = !layerHeat.checked || shown === null));
+byId("fit").addEventListener("click", () => view3d.fit());
+byId("legend-bar").style.background = heatGradientCss();
+
+byId("cancel").addEventListener("click", () => planner.cancel());
+
+downloadGcode.addEventListener("click", () => {
+  if (shown) saveText(shown.plan.gcode, outputName(shown.options.post));
+});
+downloadCl.addEventListener("click", async () => {
+  if (!shown) return;
+  if (shown.options.post === "cl") return saveText(shown.plan.gcode, outputName("cl"));
+  showProgress("CL data", null);
+  try {
+    const cl = await planner.plan({ ...shown.options, post: "cl" });
+    saveText(cl.gcode, outputName("cl"));
+  } catch (error) {
+    if (!(error instanceof CancelledError)) setStatus(`error: ${message(error)}`, "No CL data.");
+  } finally {
+    hideProgress();
+  }
+});
+
+async function fetchSample(onProgress: (fraction: number) => void): Promise<ArrayBuffer> {
   const response = await fetch(SAMPLE_URL);
   const type = response.headers.get("content-type") ?? "";
   // A dev server answers unknown paths with the page itself: that is not an STL either.
   if (!response.ok || type.includes("text/html")) {
     throw new Error(`the sample part ${SAMPLE_URL} is missing (npm start generates it)`);
   }
+  onProgress(0.5);
   return response.arrayBuffer();
 }
 
 function loadFile(file: File): void {
-  void loadStl(file.name, file.arrayBuffer());
+  void loadStl(file.name, (onProgress) => readWithProgress(file, onProgress));
 }
 
+const input = byId<HTMLInputElement>("stl-input");
 input.addEventListener("change", () => {
   const file = input.files?.[0];
   if (file) loadFile(file);
   input.value = ""; // picking the same file again reloads it
 });
-
-sampleButton.addEventListener("click", () => void loadStl("freeform_4_holes.stl", fetchSample()));
+byId("load-sample").addEventListener("click", () => void loadStl(SAMPLE, fetchSample));
 
 // Drag and drop anywhere on the page.
+const overlay = byId<HTMLDivElement>("drop-overlay");
 let dragDepth = 0;
-function hasFiles(event: DragEvent): boolean {
-  return event.dataTransfer?.types.includes("Files") ?? false;
-}
+const hasFiles = (event: DragEvent) => event.dataTransfer?.types.includes("Files") ?? false;
 document.addEventListener("dragenter", (event) => {
   if (!hasFiles(event)) return;
   event.preventDefault();
@@ -125,5 +282,5 @@ document.addEventListener("drop", (event) => {
   if (file) loadFile(file);
 });
 
-// Something to look at straight away: the bundled sample part.
-void loadStl("freeform_4_holes.stl", fetchSample());
+// A first visit shows the product working: the bundled sample, planned.
+void loadStl(SAMPLE, fetchSample);

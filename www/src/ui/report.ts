@@ -1,16 +1,11 @@
 // The mesh report as readable tables (built with DOM calls: file names never become markup).
 
 import type { MeshReport, Vec3 } from "../core";
+import { el } from "./dom";
 
 const integer = new Intl.NumberFormat("en-US");
 const decimal = new Intl.NumberFormat("en-US", { maximumFractionDigits: 3 });
 
-function el<K extends keyof HTMLElementTagNameMap>(tag: K, text?: string, className?: string): HTMLElementTagNameMap[K] {
-  const node = document.createElement(tag);
-  if (text !== undefined) node.textContent = text;
-  if (className !== undefined) node.className = className;
-  return node;
-}
 
 function point(p: Vec3): string {
   return `(${p.map((c) => decimal.format(c)).join(", ")})`;
@@ -52,15 +47,15 @@ function rows(report: MeshReport, planned: boolean): Row[] {
 }
 
 function table(report: MeshReport, planned: boolean, caption: string, testId: string): HTMLTableElement {
-  const t = el("table", undefined, "report-table");
+  const t = el("table", { className: "report-table" });
   t.dataset["testid"] = testId;
-  t.append(el("caption", caption));
+  t.append(el("caption", { text: caption }));
   const body = el("tbody");
   for (const [label, value, note] of rows(report, planned)) {
     const tr = el("tr");
-    tr.append(el("th", label));
-    const td = el("td", value);
-    if (note !== undefined) td.append(el("span", note, "note"));
+    tr.append(el("th", { text: label }));
+    const td = el("td", { text: value });
+    if (note !== undefined) td.append(el("span", { text: note, className: "note" }));
     tr.append(td);
     body.append(tr);
   }
@@ -73,12 +68,8 @@ export function renderReport(container: HTMLElement, report: MeshReport, name: s
   const closed = report.machined !== undefined;
   const parts: HTMLElement[] = [table(report, !closed, `Whole model — ${name}`, "report-model")];
   if (report.machined !== undefined) {
-    const intro = el("p", "A closed solid: the surface to machine is its top, the faces within the wall angle of the tool axis. Steep walls of bosses and pockets become holes.", "explain");
+    const intro = el("p", { text: "A closed solid: the surface to machine is its top, the faces within the wall angle of the tool axis. Steep walls of bosses and pockets become holes.", className: "explain" });
     parts.push(intro, table(report.machined, true, "Machined top surface", "report-machined"));
   }
   container.replaceChildren(...parts);
-}
-
-export function renderEmpty(container: HTMLElement, text: string): void {
-  container.replaceChildren(el("p", text, "empty"));
 }

@@ -1,0 +1,169 @@
+// SlitpathPlanner: the main-thread side of the planner worker, and the API a web CAM portal
+// embeds. One promise per request; cancel() (and a trap in the core) replaces the worker and
+// reloads the last part into the new one, so the planner stays usable.
+
+import type { MeshOptions, PlanOptions } from "../core";
+import type { LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
+
+/** Rejection reason of requests that were cancelled (by `cancel()` or a newer request). */
+export class CancelledError extends Error {
+  constructor() {
+    super("cancelled");
+    this.name = "CancelledError";
+  }
+}
+
+export interface PlannerOptions {
+  /** Makes the worker; by default the bundled module worker. */
+  createWorker?: () => Worker;
+}
+
+export interface LoadOptions {
+  /** Shown in messages and used for file names. Default "part.stl". */
+  name?: string;
+  meshOptions?: MeshOptions;
+}
+
+export interface PlanCallbacks {
+  /** Called as the core finishes steps of each stage (read, flatten, slitmap, origin, …). */
+  onProgress?: (stage: string, done: number, total: number) => void;
+}
+
+type Pending = {
+  resolve: (value: never) => void;
+  reject: (error: Error) => void;
+  onProgress?: PlanCallbacks["onProgress"];
+};
+
+export class SlitpathPlanner {
+  private worker: Worker;
+  private nextId = 1;
+  private readonly pending = new Map<number, Pending>();
+  private last: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions } | undefined;
+  private versionPromise: Promise<string>;
+  private resolveVersion: (version: string) => void = () => {};
+
+  /** Called when the worker itself failed (not a single request), with a readable message. */
+  onFailure: (message: string) => void = () => {};
+
+  constructor(private readonly options: PlannerOptions = {}) {
+    this.versionPromise = new Promise((resolve) => (this.resolveVersion = resolve));
+    this.worker = this.spawn();
+  }
+
+  /** The core's version once the worker has started. */
+  version(): Promise<string> {
+    return this.versionPromise;
+  }
+
+  /** Reads an STL (binary or ASCII). The bytes are copied (kept to reload after a cancel). */
+  load(stl: ArrayBuffer | Uint8Array, options: LoadOptions = {}): Promise<LoadedPart> {
+    const bytes = stl instanceof Uint8Array ? stl.slice().buffer : stl.slice(0);
+    const name = options.name ?? "part.stl";
+    const kept = options.meshOptions ? { bytes, name, meshOptions: options.meshOptions } : { bytes, name };
+    const promise = this.sendLoad(kept);
+    // Only a part that loaded is reloaded after a cancel.
+    promise.then(() => (this.last = kept), () => {});
+    return promise;
+  }
+
+  /** Plans the loaded part. Rejects with an Error (readable message) or a CancelledError. */
+  plan(options: PlanOptions = {}, callbacks: PlanCallbacks = {}): Promise<PlanResult> {
+    return this.request<PlanResult>({ type: "plan", id: this.nextId++, options }, [], callbacks.onProgress);
+  }
+
+  /** E_min of a pole (x, y) of the flattened plane (waits for a running plan). */
+  energy(x: number, y: number): Promise<number> {
+    return this.request<number>({ type: "energy", id: this.nextId++, x, y });
+  }
+
+  /** Stops whatever runs: every pending request rejects with CancelledError; the last part is reloaded. */
+  cancel(): void {
+    this.restart(new CancelledError());
+  }
+
+  /** Stops the worker for good. */
+  dispose(): void {
+    this.worker.terminate();
+    this.failAll(new CancelledError());
+  }
+
+  private sendLoad(part: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions }): Promise<LoadedPart> {
+    const bytes = part.bytes.slice(0); // the copy is transferred, the original kept
+    const base = { type: "load" as const, id: this.nextId++, name: part.name, bytes };
+    return this.request<LoadedPart>(part.meshOptions ? { ...base, meshOptions: part.meshOptions } : base, [bytes]);
+  }
+
+  private request<T>(message: WorkerRequest, transfer: Transferable[] = [], onProgress?: Pending["onProgress"]): Promise<T> {
+    return new Promise<T>((resolve, reject) => {
+      const pending: Pending = { resolve: resolve as (value: never) => void, reject };
+      if (onProgress) pending.onProgress = onProgress;
+      this.pending.set(message.id, pending);
+      this.worker.postMessage(message, transfer);
+    });
+  }
+
+  private spawn(): Worker {
+    const worker =
+      this.options.createWorker?.() ??
+      new Worker(new URL("./worker.ts", import.meta.url), { type: "module", name: "slitpath-planner" });
+    worker.addEventListener("message", (event: MessageEvent<WorkerResponse>) => this.receive(event.data));
+    worker.addEventListener("error", (event: ErrorEvent) => {
+      const message = `the planner worker failed: ${event.message || "could not load its script"}`;
+      this.failAll(new Error(message));
+      this.onFailure(message);
+    });
+    return worker;
+  }
+
+  private receive(message: WorkerResponse): void {
+    switch (message.type) {
+      case "ready":
+        this.resolveVersion(message.version);
+        return;
+      case "progress":
+        this.pending.get(message.id)?.onProgress?.(message.stage, message.done, message.total);
+        return;
+      case "loaded":
+        return this.settle(message.id, message.part);
+      case "planned":
+        return this.settle(message.id, message.plan);
+      case "energy":
+        return this.settle(message.id, message.value);
+      case "error": {
+        if (message.id === null) {
+          this.failAll(new Error(message.message));
+          this.onFailure(message.message);
+          return;
+        }
+        this.take(message.id)?.reject(new Error(message.message));
+        // A trap leaves the wasm instance unusable.
+        if (message.fatal) this.restart(new Error(`the planner core stopped (${message.message}); it was restarted`));
+        return;
+      }
+    }
+  }
+
+  private settle(id: number, value: unknown): void {
+    this.take(id)?.resolve(value as never);
+  }
+
+  private take(id: number): Pending | undefined {
+    const pending = this.pending.get(id);
+    this.pending.delete(id);
+    return pending;
+  }
+
+  private failAll(error: Error): void {
+    const all = [...this.pending.values()];
+    this.pending.clear();
+    for (const pending of all) pending.reject(error);
+  }
+
+  private restart(reason: Error): void {
+    this.worker.terminate();
+    this.failAll(reason);
+    this.worker = this.spawn();
+    if (this.last) this.sendLoad(this.last).catch((error: unknown) => this.onFailure(String(error)));
+  }
+}

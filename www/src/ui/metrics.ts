@@ -1,0 +1,65 @@
+// The metrics panel: the plan report as a machinist reads it (path, time, scallop against the
+// limit h, uniformity, gouge risk, the optimised pole against the centroid pole, stage timings).
+
+import type { PlanResult } from "../lib/index";
+import { el } from "./dom";
+
+const n0 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 0 });
+const n1 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 1 });
+const n3 = new Intl.NumberFormat("en-US", { maximumSignificantDigits: 3 });
+const mm = (v: number) => `${n3.format(v)} mm`;
+
+type Row = [testId: string, label: string, value: string, warn?: boolean];
+
+function rows(plan: PlanResult, limit: number): Row[] {
+  const { report } = plan;
+  const { path, verify, origin } = report;
+  const gain = origin.e_min_centroid > 0 ? 1 - origin.e_min / origin.e_min_centroid : 0;
+  const minutes = path.time_min;
+  return [
+    ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
+    ["metric-length", "Path length", `${n1.format(path.length_mm)} mm (${n0.format(path.points)} points)`],
+    ["metric-time", "Cutting time", minutes < 1 ? `${n0.format(minutes * 60)} s` : `${n1.format(minutes)} min`],
+    ["metric-retractions", "Retractions", n0.format(path.retractions), path.retractions > 0],
+    ["metric-max-turn", "Sharpest turn", `${n1.format(path.max_turn_deg)}°`],
+    ["metric-max-scallop", "Max scallop", `${mm(verify.max_scallop_mm)} (h = ${mm(limit)})`, verify.max_scallop_mm > limit * 1.0001],
+    ["metric-mean-scallop", "Mean / p95 / p99", `${mm(verify.mean_scallop_mm)} / ${mm(verify.p95_scallop_mm)} / ${mm(verify.p99_scallop_mm)}`],
+    ["metric-vmax", "V_max (uniformity)", `${n3.format(verify.v_max_mm2)} mm²`],
+    ["metric-uncovered", "Uncovered", `${n3.format(100 * verify.uncovered_fraction)} % of samples`, verify.uncovered_fraction > 0],
+    ["metric-gouges", "Gouges", n0.format(verify.gouges), verify.gouges > 0],
+    ["metric-gouge-risk", "Gouge-risk area", `${n3.format(report.gouge_risk_area_mm2)} mm²`, report.gouge_risk_area_mm2 > 0],
+    ["metric-origin", "Origin", `${origin.mode}, pole (${origin.pole_uv.map((v) => n3.format(v)).join(", ")})`],
+    ["metric-energy", "E_min (this pole)", `${n3.format(origin.e_min)} (uniformity ${n3.format(origin.uniformity)})`],
+    [
+      "metric-centroid",
+      "vs centroid pole",
+      `${n3.format(origin.e_min_centroid)}: ${gain >= 0 ? "" : "+"}${n1.format(Math.abs(100 * gain))} % ${gain >= 0 ? "lower" : "higher"} here`,
+      gain < 0,
+    ],
+  ];
+}
+
+/** Replaces the panel's content with the metrics of `plan` (scallop limit `limit`, mm). */
+export function renderMetrics(container: HTMLElement, plan: PlanResult, limit: number): void {
+  const table = el("table", { className: "metrics-table" });
+  const body = el("tbody");
+  for (const [testId, label, value, warn] of rows(plan, limit)) {
+    const td = el("td", { text: value, testId });
+    if (warn) td.classList.add("warn");
+    body.append(el("tr", {}, el("th", { text: label }), td));
+  }
+  table.append(body);
+  const timings = Object.entries(plan.report.timings_ms)
+    .filter(([stage]) => stage !== "total")
+    .map(([stage, ms]) => `${stage} ${n0.format(ms)}`)
+    .join(" · ");
+  const total = plan.report.timings_ms["total"] ?? plan.ms;
+  container.replaceChildren(
+    table,
+    el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(total)}` }),
+  );
+}
+
+export function renderNoPlan(container: HTMLElement, text: string): void {
+  container.replaceChildren(el("p", { className: "empty", text }));
+}
