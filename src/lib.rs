@@ -17,6 +17,7 @@
 //! | ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
 //! | G-code posts (LinuxCNC, GRBL, A/C 5-axis) and CL data | [`gcode`] | implemented |
 //! | scallop simulation of the final path | [`verify`] | implemented |
+//! | the whole pipeline, stage by stage | [`plan`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
 //! | deterministic transcendental functions | [`num`] | implemented |
 
@@ -28,6 +29,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod num;
 pub mod origin;
+pub mod plan;
 pub mod slitmap;
 pub mod spacing;
 pub mod spiral;

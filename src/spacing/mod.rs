@@ -30,6 +30,9 @@
 //! polygonal sag of a slit radius (so a ring never runs through a slit), and every meridian
 //! cusp tested at most R from a ball centre on S^{h·target_fraction}.
 
+// `!(x > y)` is deliberate: NaN must fail every progress test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod lift;
 
 pub use lift::{Lift, Lifted};
@@ -363,10 +366,12 @@ impl<'a> Spacer<'a> {
             let f = if seg > 0.0 { (target - cumulative[j]) / seg } else { 0.0 };
             thetas.push(TAU * (j as f64 + f) / m as f64);
         }
+        // The ends of a hole are where the rings turn around it: test them densely.
         for s in &self.slits {
-            for t in [s.theta_start, s.theta_start + s.extent] {
-                for d in [-2e-3, 0.0, 2e-3] {
-                    thetas.push((t + d).rem_euclid(TAU));
+            for (t, out) in [(s.theta_start, -1.0), (s.theta_start + s.extent, 1.0)] {
+                for d in [0.0, 5e-4, 1e-3, 2e-3, 4e-3, 8e-3, 1.6e-2, 3.2e-2] {
+                    thetas.push((t + out * d).rem_euclid(TAU));
+                    thetas.push((t - out * d).rem_euclid(TAU));
                 }
             }
         }

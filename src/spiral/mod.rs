@@ -377,8 +377,11 @@ fn sample(lift: &Lift<'_>, pieces: &[Piece], sense: f64, options: &SpiralOptions
             };
             du = if halvings == 0 { step * 1.5 } else { step.max(64.0 * min_step) };
             u = if next_u >= u1 { u1 } else { next_u };
-            out.push(next);
-            here = next;
+            // A step of the minimal size may not move on the surface (folds): no repeated points.
+            if (next.cc - here.cc).length() > 1e-7 {
+                out.push(next);
+                here = next;
+            }
         }
     }
     Ok(out)

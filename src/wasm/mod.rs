@@ -14,9 +14,13 @@ use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
-use crate::flatten::{self, FlattenInput, FlattenOptions, Flattening};
+use crate::gcode::Post;
 use crate::mesh::{self, MeshOptions, MeshOutput};
-use crate::slitmap::{PlanarDomain, SlitMap, SlitMapOptions, SlitMapSolver};
+use crate::origin::{EnergyEvaluator, OriginChoice, OriginOptions};
+use crate::plan::{Plan, PlanOptions, Planner as Core};
+use crate::slitmap::SlitMap;
+use crate::spiral::{Cut, Direction};
+use crate::toolpath::Axes;
 
 /// Installs the panic hook the first time any entry point runs.
 fn init() {
@@ -80,12 +84,99 @@ impl JsMeshOptions {
     }
 }
 
-/// One loaded part: the mesh stage's output and the reusable conformal solvers, built on first use.
+/// One loaded part: the mesh stage's output and the reusable planner (flattening and
+/// factorisations), built on first use, and the last plan.
 #[wasm_bindgen]
 pub struct Planner {
-    output: MeshOutput,
-    conformal: Option<(Flattening, SlitMapSolver)>,
+    output: Option<MeshOutput>,
+    core: Option<Core>,
     last_map: Option<SlitMap>,
+    last_plan: Option<Plan>,
+}
+
+/// Plan options as the page passes them (camelCase, all optional; unknown fields are an error).
+#[derive(Debug, Default, Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+struct JsPlanOptions {
+    radius_mm: Option<f64>,
+    scallop_mm: Option<f64>,
+    axes: Option<u8>,
+    lead_deg: Option<f64>,
+    tilt_deg: Option<f64>,
+    direction: Option<Direction>,
+    cut: Option<Cut>,
+    origin: Option<JsOrigin>,
+    post: Option<String>,
+    feed_mm_min: Option<f64>,
+    plunge_feed_mm_min: Option<f64>,
+    spindle_rpm: Option<f64>,
+    safe_z_mm: Option<f64>,
+    verify_samples: Option<usize>,
+    part_name: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum JsOrigin {
+    Name(String),
+    Point3 { x: f64, y: f64, z: f64 },
+    Plane { x: f64, y: f64 },
+}
+
+impl JsPlanOptions {
+    fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
+        let js: JsPlanOptions = if options.is_undefined() || options.is_null() {
+            JsPlanOptions::default()
+        } else {
+            serde_wasm_bindgen::from_value(options).map_err(|e| JsError::new(&format!("invalid plan options: {e}")))?
+        };
+        let d = PlanOptions::default();
+        let origin = match js.origin {
+            None => d.origin,
+            Some(JsOrigin::Name(n)) => match n.as_str() {
+                "auto" => OriginChoice::Auto,
+                "centroid" => OriginChoice::Centroid,
+                _ => match n.strip_prefix("hole:").and_then(|k| k.parse().ok()) {
+                    Some(k) => OriginChoice::Hole(k),
+                    None => return Err(JsError::new(&format!("invalid origin `{n}`: use auto, centroid, hole:N, {{x, y}} or {{x, y, z}}"))),
+                },
+            },
+            Some(JsOrigin::Point3 { x, y, z }) => OriginChoice::Point3d(glam::DVec3::new(x, y, z)),
+            Some(JsOrigin::Plane { x, y }) => OriginChoice::Plane(glam::DVec2::new(x, y)),
+        };
+        let axes = match js.axes.unwrap_or(3) {
+            3 => Axes::default(),
+            5 => Axes::Five { lead_deg: js.lead_deg.unwrap_or(15.0), tilt_deg: js.tilt_deg.unwrap_or(0.0) },
+            n => return Err(JsError::new(&format!("invalid axes {n}: use 3 or 5"))),
+        };
+        let post: Post = match js.post {
+            None => d.post,
+            Some(p) => p.parse().map_err(|e: String| JsError::new(&e))?,
+        };
+        Ok(PlanOptions {
+            radius_mm: js.radius_mm.unwrap_or(d.radius_mm),
+            scallop_mm: js.scallop_mm.unwrap_or(d.scallop_mm),
+            origin,
+            direction: js.direction.unwrap_or(d.direction),
+            cut: js.cut.unwrap_or(d.cut),
+            axes,
+            post,
+            feed_mm_min: js.feed_mm_min.unwrap_or(d.feed_mm_min),
+            plunge_feed_mm_min: js.plunge_feed_mm_min.unwrap_or(d.plunge_feed_mm_min),
+            spindle_rpm: js.spindle_rpm.unwrap_or(d.spindle_rpm),
+            safe_z_mm: js.safe_z_mm,
+            verify_samples: js.verify_samples.unwrap_or(d.verify_samples),
+            part_name: js.part_name.unwrap_or(d.part_name),
+        })
+    }
+}
+
+fn now() -> f64 {
+    js_sys::Date::now()
+}
+
+fn flat<const N: usize>(v: impl Iterator<Item = [f64; N]>) -> Vec<f64> {
+    v.flatten().collect()
 }
 
 fn js_err(e: impl std::fmt::Display) -> JsError {
@@ -113,42 +204,42 @@ impl Planner {
         init();
         let options = JsMeshOptions::parse(options)?;
         let output = mesh::load(stl, &options).map_err(|e| JsError::new(&e.to_string()))?;
-        Ok(Planner { output, conformal: None, last_map: None })
+        Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
     }
 
     /// The mesh report (the same object `slitpath info --json` prints).
     pub fn report(&self) -> Result<JsValue, JsError> {
-        to_js(&self.output.report)
+        to_js(&self.mesh().0)
     }
 
     /// Vertex positions of the surface to machine, flat `[x0, y0, z0, x1, …]`, for WebGL.
     pub fn positions(&self) -> Vec<f32> {
-        let p = &self.output.surface.positions;
+        let p = &self.mesh().1.positions;
         p.iter().flat_map(|v| v.as_vec3().to_array()).collect()
     }
 
     /// Triangles of the surface to machine, flat vertex indices `[a0, b0, c0, a1, …]`.
     pub fn triangles(&self) -> Vec<u32> {
-        self.output.surface.triangles.iter().flatten().copied().collect()
+        self.mesh().1.triangles.iter().flatten().copied().collect()
     }
 
     /// Flattened positions (BFF, seed 000 §2.1), flat `[u0, v0, u1, …]`, same vertex order.
     /// Factorises once per part; throws for a surface that cannot be planned (closed, genus > 0).
     pub fn flattened(&mut self) -> Result<Vec<f64>, JsError> {
-        Ok(self.conformal()?.0.uv.iter().flat_map(|p| p.to_array()).collect())
+        Ok(self.core()?.flattening.uv.iter().flat_map(|p| p.to_array()).collect())
     }
 
     /// Quality figures of the flattening (flipped triangles, quasi-conformal distortion, area).
     #[wasm_bindgen(js_name = flattenQuality)]
     pub fn flatten_quality(&mut self) -> Result<JsValue, JsError> {
-        to_js(&self.conformal()?.0.quality)
+        to_js(&self.core()?.flattening.quality)
     }
 
     /// The slit map for a pole `(x, y)` of the flattened plane: the image `w` per vertex, flat
     /// `[re0, im0, re1, …]`. Reuses the factorisation: a new pole costs back-substitutions only.
     #[wasm_bindgen(js_name = slitMap)]
     pub fn slit_map(&mut self, x: f64, y: f64) -> Result<Vec<f64>, JsError> {
-        let map = self.conformal()?.1.map(glam::DVec2::new(x, y)).map_err(js_err)?;
+        let map = self.core()?.solver.map(glam::DVec2::new(x, y)).map_err(js_err)?;
         let w = map.w.iter().flat_map(|p| p.to_array()).collect();
         self.last_map = Some(map);
         Ok(w)
@@ -171,15 +262,109 @@ impl Planner {
         })
     }
 
-    fn conformal(&mut self) -> Result<&(Flattening, SlitMapSolver), JsError> {
-        if self.conformal.is_none() {
-            let surface = &self.output.surface;
-            surface.check_plannable().map_err(js_err)?;
-            let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(js_err)?;
-            let domain = PlanarDomain::of_surface(surface, flat.uv.clone());
-            let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).map_err(js_err)?;
-            self.conformal = Some((flat, solver));
+    /// Plans with `options` (see `JsPlanOptions`: radiusMm, scallopMm, axes, leadDeg, tiltDeg,
+    /// direction, cut, origin, post, feedMmMin, plungeFeedMmMin, spindleRpm, safeZMm,
+    /// verifySamples, partName) and returns the plan report (the CLI's `--report` object).
+    /// `on_progress(stage, done, total)` is called as each stage starts.
+    pub fn plan(&mut self, options: JsValue, on_progress: Option<js_sys::Function>) -> Result<JsValue, JsError> {
+        let options = JsPlanOptions::parse(options)?;
+        let core = self.core()?;
+        let mut progress = |stage: &str, done: usize, total: usize| {
+            if let Some(f) = &on_progress {
+                let _ = f.call3(&JsValue::NULL, &stage.into(), &(done as f64).into(), &(total as f64).into());
+            }
+        };
+        let plan = core.plan(&options, &mut progress, &now).map_err(js_err)?;
+        let report = to_js(&plan.report);
+        self.last_plan = Some(plan);
+        report
+    }
+
+    /// The slit-map image w per vertex for the last plan's pole, flat `[re0, im0, …]`.
+    #[wasm_bindgen(js_name = planW)]
+    pub fn plan_w(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.map.w.iter().map(|w| w.to_array())))
+    }
+
+    /// |w| of each ring, outermost first.
+    #[wasm_bindgen(js_name = ringRadii)]
+    pub fn ring_radii(&self) -> Result<Vec<f64>, JsError> {
+        Ok(self.last()?.rings.radii())
+    }
+
+    /// Cutter-contact points of the spiral, flat xyz.
+    #[wasm_bindgen(js_name = pathContacts)]
+    pub fn path_contacts(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.spiral.points.iter().map(|p| p.cc.to_array())))
+    }
+
+    /// Slit-domain image w of each spiral point, flat `[re, im, …]`.
+    #[wasm_bindgen(js_name = pathW)]
+    pub fn path_w(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.spiral.points.iter().map(|p| p.w.to_array())))
+    }
+
+    /// Tool tip of every move (lead-in, cut, lead-out, rapids), flat xyz.
+    #[wasm_bindgen(js_name = pathTips)]
+    pub fn path_tips(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.toolpath.moves.iter().map(|m| m.tip.to_array())))
+    }
+
+    /// Unit tool axis of every move, flat xyz.
+    #[wasm_bindgen(js_name = pathAxes)]
+    pub fn path_axes(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.toolpath.moves.iter().map(|m| m.axis.to_array())))
+    }
+
+    /// Verified scallop height per surface vertex, mm; NaN where uncovered or not verified.
+    #[wasm_bindgen(js_name = vertexScallop)]
+    pub fn vertex_scallop(&self) -> Result<Vec<f64>, JsError> {
+        let plan = self.last()?;
+        Ok(match &plan.verification {
+            Some(v) => v
+                .vertex_scallop_mm
+                .iter()
+                .zip(&v.vertex_uncovered)
+                .map(|(&s, &u)| if u { f64::NAN } else { s })
+                .collect(),
+            None => vec![f64::NAN; self.mesh().1.positions.len()],
+        })
+    }
+
+    /// The G-code (or CL data) of the last plan.
+    pub fn gcode(&self) -> Result<String, JsError> {
+        Ok(self.last()?.gcode.clone())
+    }
+
+    /// E_min (seed 000 eq. 18) for a pole (x, y) of the flattened plane, with the last plan's
+    /// ball radius (3 mm before any plan).
+    pub fn energy(&mut self, x: f64, y: f64) -> Result<f64, JsError> {
+        let radius_mm = self.last_plan.as_ref().map_or(3.0, |p| p.report.options.radius_mm);
+        let core = self.core()?;
+        let options = OriginOptions { radius_mm, ..OriginOptions::default() };
+        let evaluator = EnergyEvaluator::new(&core.surface, &core.solver, &options).map_err(js_err)?;
+        Ok(evaluator.evaluate(glam::DVec2::new(x, y)).map_err(js_err)?.e_min)
+    }
+
+    fn last(&self) -> Result<&Plan, JsError> {
+        self.last_plan.as_ref().ok_or_else(|| JsError::new("no plan yet: call plan(options)"))
+    }
+
+    /// The mesh report and surface (from the planner once it is built).
+    fn mesh(&self) -> (&crate::mesh::MeshReport, &crate::mesh::Surface) {
+        match (&self.output, &self.core) {
+            (Some(o), _) => (&o.report, &o.surface),
+            (None, Some(c)) => (&c.report, &c.surface),
+            (None, None) => unreachable!("a Planner always holds its mesh or its core"),
         }
-        Ok(self.conformal.as_ref().expect("just built"))
+    }
+
+    fn core(&mut self) -> Result<&Core, JsError> {
+        if self.core.is_none() {
+            let output = self.output.as_ref().expect("the mesh is held until the core is built").clone();
+            self.core = Some(Core::new(output, &now).map_err(js_err)?);
+            self.output = None;
+        }
+        Ok(self.core.as_ref().expect("just built"))
     }
 }

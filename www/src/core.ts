@@ -78,6 +78,8 @@ export interface PlanOptions {
   /** `null`: automatic. */
   safeZMm?: number | null;
   verifySamples?: number;
+  /** Name in the G-code header (the CLI uses the file name without extension). Default "part". */
+  partName?: string;
 }
 
 /** The plan report: the CLI's `--report` JSON. */

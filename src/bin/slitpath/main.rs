@@ -4,12 +4,16 @@
 //! - `info PART.stl [--json]`: the mesh report (topology, boundary loops, machined top surface).
 //! - `map PART.stl [--pole-3d X,Y,Z | --pole hole:N | --pole centroid] --json OUT.json [--svg OUT.svg]`:
 //!   flattens the part and writes its conformal slit map.
+//! - `plan PART.stl --radius R --scallop H [--axes 3|5] [--post …] [--origin …] -o OUT [--report R.json]`:
+//!   plans the spiral and writes G-code (or CL data) and the plan report.
 //! - `fixture NAME -o FILE.stl`: writes one of the analytic test surfaces as binary STL.
 //!
 //! Errors go to stderr as one line and the exit code is non-zero; no panic reaches the user.
 
 #[cfg(not(target_arch = "wasm32"))]
 mod map;
+#[cfg(not(target_arch = "wasm32"))]
+mod plan;
 #[cfg(not(target_arch = "wasm32"))]
 mod svg;
 
@@ -53,6 +57,60 @@ mod cli {
             /// Where to write an SVG drawing of the flattened and the slit domain.
             #[arg(long)]
             svg: Option<PathBuf>,
+            #[command(flatten)]
+            mesh: MeshArgs,
+        },
+        /// Plans the spiral finishing path and writes its G-code (or CL data).
+        Plan {
+            part: PathBuf,
+            /// Ball radius, mm.
+            #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
+            radius: f64,
+            /// Scallop-height limit, mm.
+            #[arg(long, default_value_t = 0.02, allow_hyphen_values = true)]
+            scallop: f64,
+            /// 3 (fixed axis +Z) or 5 (lead/tilt, seed 000 eq. 5).
+            #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(3..=5))]
+            axes: u8,
+            /// 5-axis lead angle, degrees.
+            #[arg(long, default_value_t = 15.0, allow_hyphen_values = true)]
+            lead: f64,
+            /// 5-axis tilt angle, degrees.
+            #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+            tilt: f64,
+            /// linuxcnc, grbl, ac (5-axis A/C with TCP) or cl (APT CL data).
+            #[arg(long, default_value = "linuxcnc")]
+            post: String,
+            /// auto, centroid, hole:N, X,Y,Z (a point of the part) or uv:U,V (flattened plane).
+            #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+            origin: String,
+            /// inward or outward.
+            #[arg(long, default_value = "inward")]
+            direction: String,
+            /// climb or conventional (for an M3 spindle).
+            #[arg(long, default_value = "climb")]
+            cut: String,
+            /// Cutting feed, mm/min.
+            #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
+            feed: f64,
+            /// Lead-in feed, mm/min.
+            #[arg(long, default_value_t = 300.0, allow_hyphen_values = true)]
+            plunge_feed: f64,
+            /// Spindle speed, rpm.
+            #[arg(long, default_value_t = 12000.0, allow_hyphen_values = true)]
+            spindle: f64,
+            /// Safe height, mm (default: above the highest tool point).
+            #[arg(long, allow_hyphen_values = true)]
+            safe_z: Option<f64>,
+            /// Verifier samples (0 skips the verification).
+            #[arg(long, default_value_t = 100_000)]
+            verify_samples: usize,
+            /// Where to write the G-code or CL data.
+            #[arg(short, long)]
+            output: PathBuf,
+            /// Where to write the plan report (JSON).
+            #[arg(long)]
+            report: Option<PathBuf>,
             #[command(flatten)]
             mesh: MeshArgs,
         },
@@ -127,6 +185,50 @@ mod cli {
                 write(&json, text.as_bytes())?;
                 if let Some(svg) = svg {
                     write(&svg, result.svg.as_bytes())?;
+                }
+                Ok(())
+            }
+            Command::Plan {
+                part,
+                radius,
+                scallop,
+                axes,
+                lead,
+                tilt,
+                post,
+                origin,
+                direction,
+                cut,
+                feed,
+                plunge_feed,
+                spindle,
+                safe_z,
+                verify_samples,
+                output,
+                report,
+                mesh: args,
+            } => {
+                let options = crate::plan::options(crate::plan::Args {
+                    part: &part,
+                    radius,
+                    scallop,
+                    axes,
+                    lead,
+                    tilt,
+                    post: &post,
+                    origin: &origin,
+                    direction: &direction,
+                    cut: &cut,
+                    feed,
+                    plunge_feed,
+                    spindle,
+                    safe_z,
+                    verify_samples,
+                })?;
+                let (gcode, json) = crate::plan::run(&part, &args.options(), &options)?;
+                write(&output, gcode.as_bytes())?;
+                if let Some(report) = report {
+                    write(&report, json.as_bytes())?;
                 }
                 Ok(())
             }

@@ -10,6 +10,7 @@ import { PlanarLocator, boundaryLoops, mapPoints, matchMoves } from "./geometry"
 import type { LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
 
 let current: Part | undefined;
+let currentName = "part";
 let currentUv: Float64Array | null = null;
 let currentTriangles: Uint32Array | null = null;
 
@@ -31,6 +32,8 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   const part = await Part.open(new Uint8Array(request.bytes), request.meshOptions);
   current?.free();
   current = part;
+  // The G-code header names the part like the CLI does: the file name without its extension.
+  currentName = request.name.replace(/\.[^./\\]*$/, "") || "part";
   const { positions, triangles } = part.surface();
   let uv: Float64Array | null = null;
   let previewW: Float64Array | null = null;
@@ -63,7 +66,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
 function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {
   if (current === undefined) throw new Error("no part is loaded");
   const started = performance.now();
-  const output = current.plan(request.options, (stage, done, total) =>
+  const output = current.plan({ ...request.options, partName: currentName }, (stage, done, total) =>
     post({ type: "progress", id: request.id, stage, done, total }),
   );
   // The views link the slit domain to the flattened one: locate each path point's w in the image.

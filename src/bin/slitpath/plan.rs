@@ -1,0 +1,103 @@
+//! `slitpath plan`: the whole pipeline from an STL to G-code, with the JSON report.
+
+use glam::{DVec2, DVec3};
+use slitpath::gcode::Post;
+use slitpath::mesh::{self, MeshOptions};
+use slitpath::origin::OriginChoice;
+use slitpath::plan::{PlanOptions, Planner};
+use slitpath::spiral::{Cut, Direction};
+use slitpath::toolpath::Axes;
+use std::path::Path;
+use std::time::Instant;
+
+/// The command-line values, before validation.
+pub struct Args<'a> {
+    pub part: &'a Path,
+    pub radius: f64,
+    pub scallop: f64,
+    pub axes: u8,
+    pub lead: f64,
+    pub tilt: f64,
+    pub post: &'a str,
+    pub origin: &'a str,
+    pub direction: &'a str,
+    pub cut: &'a str,
+    pub feed: f64,
+    pub plunge_feed: f64,
+    pub spindle: f64,
+    pub safe_z: Option<f64>,
+    pub verify_samples: usize,
+}
+
+pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
+    let post: Post = a.post.parse().map_err(|e| format!("--post: {e}"))?;
+    let axes = match a.axes {
+        3 => Axes::default(),
+        5 => Axes::Five { lead_deg: a.lead, tilt_deg: a.tilt },
+        n => return Err(format!("--axes {n}: use 3 or 5")),
+    };
+    let direction = match a.direction {
+        "inward" => Direction::Inward,
+        "outward" => Direction::Outward,
+        d => return Err(format!("--direction `{d}`: use inward or outward")),
+    };
+    let cut = match a.cut {
+        "climb" => Cut::Climb,
+        "conventional" => Cut::Conventional,
+        c => return Err(format!("--cut `{c}`: use climb or conventional")),
+    };
+    let part_name = a.part.file_stem().map_or("part".into(), |s| s.to_string_lossy().into_owned());
+    Ok(PlanOptions {
+        radius_mm: a.radius,
+        scallop_mm: a.scallop,
+        origin: parse_origin(a.origin)?,
+        direction,
+        cut,
+        axes,
+        post,
+        feed_mm_min: a.feed,
+        plunge_feed_mm_min: a.plunge_feed,
+        spindle_rpm: a.spindle,
+        safe_z_mm: a.safe_z,
+        verify_samples: a.verify_samples,
+        part_name,
+    })
+}
+
+/// `auto`, `centroid`, `hole:N`, `X,Y,Z` or `uv:U,V`.
+pub fn parse_origin(s: &str) -> Result<OriginChoice, String> {
+    let numbers = |t: &str| -> Result<Vec<f64>, String> {
+        t.split(',').map(|p| p.trim().parse::<f64>().map_err(|_| format!("--origin: `{p}` is not a number"))).collect()
+    };
+    Ok(match s {
+        "auto" => OriginChoice::Auto,
+        "centroid" => OriginChoice::Centroid,
+        _ if s.starts_with("hole:") => {
+            OriginChoice::Hole(s[5..].parse().map_err(|_| format!("--origin {s}: `{}` is not a hole number", &s[5..]))?)
+        }
+        _ if s.starts_with("uv:") => match numbers(&s[3..])?.as_slice() {
+            [u, v] => OriginChoice::Plane(DVec2::new(*u, *v)),
+            _ => return Err(format!("--origin {s}: expected uv:U,V")),
+        },
+        _ => match numbers(s)?.as_slice() {
+            [x, y, z] => OriginChoice::Point3d(DVec3::new(*x, *y, *z)),
+            _ => return Err(format!("--origin `{s}`: use auto, centroid, hole:N, X,Y,Z or uv:U,V")),
+        },
+    })
+}
+
+/// Reads, plans and returns the G-code and the report JSON.
+pub fn run(part: &Path, mesh_options: &MeshOptions, options: &PlanOptions) -> Result<(String, String), String> {
+    let started = Instant::now();
+    let now = || started.elapsed().as_secs_f64() * 1e3;
+    let bytes = std::fs::read(part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
+    let name = part.display();
+    let mesh = mesh::load(&bytes, mesh_options).map_err(|e| format!("{name}: {e}"))?;
+    let t_read = now();
+    let planner = Planner::new(mesh, &now).map_err(|e| format!("{name}: {e}"))?;
+    let mut plan = planner.plan(options, &mut |_, _, _| {}, &now).map_err(|e| format!("{name}: {e}"))?;
+    plan.report.timings_ms.read = t_read;
+    plan.report.timings_ms.total += t_read;
+    let json = serde_json::to_string_pretty(&plan.report).map_err(|e| e.to_string())?;
+    Ok((plan.gcode, json))
+}

@@ -1,0 +1,486 @@
+//! The whole pipeline, stage by stage: STL → surface → flattening → slit map → optimal pole →
+//! rings → spiral → tool positions → G-code, with the scallop verifier beside it (DESIGN.md,
+//! "The pipeline"). The CLI's `plan` command and the wasm facade both call [`Planner`], so the
+//! page and the CLI produce the same file for the same part and options.
+//!
+//! [`Planner::new`] does the per-part work once (flattening, both factorisations); each
+//! [`Planner::plan`] then costs the origin search and the later stages, so re-planning after the
+//! user changes an option is cheap. The core has no clock: callers pass `now` (milliseconds).
+//!
+//! The G-code header carries the options and the path figures, never timings or versions, so
+//! that the output is byte-identical wherever it was planned.
+
+use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenQuality, Flattening};
+use crate::gcode::{self, GcodeError, GcodeOptions, Post};
+use crate::mesh::{MeshOutput, MeshReport, Surface};
+use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
+use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
+use crate::spacing::{self, Rings, SpacingError, SpacingOptions};
+use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
+use crate::toolpath::{self, Axes, Toolpath, ToolpathError, ToolpathOptions};
+use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
+use glam::DVec3;
+use serde::Serialize;
+
+/// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the
+/// CLI's and the page's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// Ball radius R, mm. Default 3.
+    pub radius_mm: f64,
+    /// Scallop-height limit h, mm. Default 0.02.
+    pub scallop_mm: f64,
+    /// Default [`OriginChoice::Auto`].
+    pub origin: OriginChoice,
+    /// Default inward.
+    pub direction: Direction,
+    /// Default climb.
+    pub cut: Cut,
+    /// Default 3-axis along +Z.
+    pub axes: Axes,
+    /// Default LinuxCNC.
+    pub post: Post,
+    /// Cutting feed, mm/min. Default 1000.
+    pub feed_mm_min: f64,
+    /// Lead-in feed, mm/min. Default 300.
+    pub plunge_feed_mm_min: f64,
+    /// Default 12 000.
+    pub spindle_rpm: f64,
+    /// `None`: above the highest tool point (see [`ToolpathOptions::safe_z_mm`]).
+    pub safe_z_mm: Option<f64>,
+    /// Samples of the verifier; 0 skips verification. Default 100 000.
+    pub verify_samples: usize,
+    /// Part name for the G-code header (sanitised by the post). Default "part".
+    pub part_name: String,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        let tp = ToolpathOptions::default();
+        Self {
+            radius_mm: 3.0,
+            scallop_mm: 0.02,
+            origin: OriginChoice::Auto,
+            direction: Direction::Inward,
+            cut: Cut::Climb,
+            axes: Axes::default(),
+            post: Post::LinuxCnc,
+            feed_mm_min: tp.feed_mm_min,
+            plunge_feed_mm_min: tp.plunge_feed_mm_min,
+            spindle_rpm: tp.spindle_rpm,
+            safe_z_mm: None,
+            verify_samples: 100_000,
+            part_name: "part".into(),
+        }
+    }
+}
+
+/// A failure of any stage, with the stage's own error (which names what is at fault).
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    #[error("{0}")]
+    InvalidOption(String),
+    #[error("{0}")]
+    Mesh(#[from] crate::mesh::MeshError),
+    #[error("flattening: {0}")]
+    Flatten(#[from] FlattenError),
+    #[error("slit map: {0}")]
+    SlitMap(#[from] SlitMapError),
+    #[error("origin: {0}")]
+    Origin(#[from] OriginError),
+    #[error("spacing: {0}")]
+    Spacing(#[from] SpacingError),
+    #[error("spiral: {0}")]
+    Spiral(#[from] SpiralError),
+    #[error("tool path: {0}")]
+    Toolpath(#[from] ToolpathError),
+    #[error("G-code: {0}")]
+    Gcode(#[from] GcodeError),
+    #[error("verification: {0}")]
+    Verify(#[from] VerifyError),
+}
+
+/// Stage timings, milliseconds.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Timings {
+    pub read: f64,
+    pub flatten: f64,
+    pub slitmap: f64,
+    pub origin: f64,
+    pub spacing: f64,
+    pub spiral: f64,
+    pub toolpath: f64,
+    pub verify: f64,
+    pub post: f64,
+    pub total: f64,
+}
+
+/// A part ready to plan: the surface, its flattening and the factorised slit-map solver.
+pub struct Planner {
+    pub report: MeshReport,
+    pub surface: Surface,
+    pub flattening: Flattening,
+    pub domain: PlanarDomain,
+    pub solver: SlitMapSolver,
+    /// Timings of the per-part work (`read` is the caller's, when it measured it).
+    pub prepare_ms: Timings,
+}
+
+/// The result of one plan.
+pub struct Plan {
+    pub origin: Origin,
+    pub map: SlitMap,
+    pub rings: Rings,
+    pub spiral: Spiral,
+    pub toolpath: Toolpath,
+    pub verification: Option<Verification>,
+    pub path: PathMetrics,
+    pub gcode: String,
+    pub report: PlanReport,
+}
+
+/// The stages reported to a progress callback, in order.
+pub const STAGES: [&str; 7] = ["origin", "spacing", "spiral", "toolpath", "post", "verify", "done"];
+
+impl Planner {
+    /// Flattens the surface and factorises the slit map once.
+    pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
+        let MeshOutput { report, surface } = mesh;
+        surface.check_plannable()?;
+        let t = now();
+        let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
+        let t_flatten = now() - t;
+        let domain = PlanarDomain::of_surface(&surface, flattening.uv.clone());
+        let t = now();
+        let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
+        let t_slit = now() - t;
+        let prepare_ms = Timings { flatten: t_flatten, slitmap: t_slit, ..Timings::default() };
+        Ok(Self { report, surface, flattening, domain, solver, prepare_ms })
+    }
+
+    /// Plans with `options`; `progress(stage, done, total)` is called as each stage starts.
+    pub fn plan(
+        &self,
+        options: &PlanOptions,
+        progress: &mut dyn FnMut(&str, usize, usize),
+        now: &dyn Fn() -> f64,
+    ) -> Result<Plan, PlanError> {
+        check_options(options, &self.surface)?;
+        let mut timings = self.prepare_ms.clone();
+        let total = STAGES.len() - 1;
+        let mut stage = |i: usize| progress(STAGES[i], i, total);
+        let r = options.radius_mm;
+
+        stage(0);
+        let t = now();
+        let origin_options = OriginOptions { radius_mm: r, choice: options.origin, ..OriginOptions::default() };
+        let origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
+        let map = self.solver.map(origin.pole)?;
+        timings.origin = now() - t;
+
+        stage(1);
+        let t = now();
+        let spacing_options = SpacingOptions { radius_mm: r, scallop_mm: options.scallop_mm, ..SpacingOptions::default() };
+        let rings = spacing::spacing(&self.surface, &map, &spacing_options)?;
+        timings.spacing = now() - t;
+
+        stage(2);
+        let t = now();
+        let spiral_options = SpiralOptions { direction: options.direction, cut: options.cut, ..SpiralOptions::default() };
+        let spiral = spiral::spiral(&self.surface, &map, &rings, &spiral_options)?;
+        timings.spiral = now() - t;
+
+        stage(3);
+        let t = now();
+        let toolpath_options = ToolpathOptions {
+            radius_mm: r,
+            axes: options.axes,
+            feed_mm_min: options.feed_mm_min,
+            plunge_feed_mm_min: options.plunge_feed_mm_min,
+            spindle_rpm: options.spindle_rpm,
+            safe_z_mm: options.safe_z_mm,
+            ..ToolpathOptions::default()
+        };
+        let toolpath = toolpath::toolpath(&spiral.contacts(), &spiral.normals(), &toolpath_options)?;
+        let path = verify::path_metrics(&spiral.contacts(), options.feed_mm_min);
+        timings.toolpath = now() - t;
+
+        let summary = PathSummary {
+            length_mm: path.length_mm,
+            points: path.points,
+            retractions: toolpath.stats.retractions,
+            max_turn_deg: path.max_turn_deg,
+            rho2: path.rho2,
+            time_min: toolpath.stats.estimated_time_s / 60.0,
+        };
+
+        stage(4);
+        let t = now();
+        let header = header_lines(options, &origin, &rings, &summary);
+        let gcode_options =
+            GcodeOptions { post: options.post, part_name: options.part_name.clone(), header, ..GcodeOptions::default() };
+        let gcode = gcode::gcode(&toolpath, &gcode_options)?;
+        timings.post = now() - t;
+
+        stage(5);
+        let t = now();
+        let verification = if options.verify_samples > 0 {
+            let centres: Vec<DVec3> = toolpath.contact_moves().iter().map(|m| m.centre).collect();
+            let verify_options = VerifyOptions {
+                radius_mm: r,
+                scallop_mm: options.scallop_mm,
+                samples: options.verify_samples,
+                gouge_tolerance_mm: facet_tolerance_mm(&self.surface, r),
+                ..VerifyOptions::default()
+            };
+            Some(verify::verify(&self.surface, &[centres], &verify_options)?)
+        } else {
+            None
+        };
+        timings.verify = now() - t;
+        timings.total = timings.flatten
+            + timings.slitmap
+            + timings.origin
+            + timings.spacing
+            + timings.spiral
+            + timings.toolpath
+            + timings.post
+            + timings.verify;
+        stage(6);
+
+        let report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification.as_ref(), timings);
+        Ok(Plan { origin, map, rings, spiral, toolpath, verification, path, gcode, report })
+    }
+}
+
+/// How deep a ball placed along the interpolated vertex normal can dip below the plane of the
+/// facet it touches: R(1 − cos δ), δ the largest angle between a face normal and its vertex
+/// normals (at least 1e-4 mm). This is below the facets' own chordal error from the true
+/// surface, so the verifier counts only deeper penetrations as gouges.
+pub fn facet_tolerance_mm(surface: &Surface, radius_mm: f64) -> f64 {
+    let mut cos_min: f64 = 1.0;
+    for (f, t) in surface.triangles.iter().enumerate() {
+        for &v in t {
+            cos_min = cos_min.min(surface.face_normals[f].dot(surface.vertex_normals[v as usize]));
+        }
+    }
+    (radius_mm * (1.0 - cos_min.clamp(-1.0, 1.0))).max(1e-4)
+}
+
+fn check_options(o: &PlanOptions, surface: &Surface) -> Result<(), PlanError> {
+    let bad = |m: String| Err(PlanError::InvalidOption(m));
+    if !(o.radius_mm.is_finite() && o.radius_mm > 0.0) {
+        return bad(format!("the ball radius must be a positive number of mm, got {}", o.radius_mm));
+    }
+    if !(o.scallop_mm.is_finite() && o.scallop_mm > 0.0) {
+        return bad(format!("the scallop height must be a positive number of mm, got {}", o.scallop_mm));
+    }
+    if o.scallop_mm >= o.radius_mm {
+        return bad(format!(
+            "the scallop height {} mm must be smaller than the ball radius {} mm",
+            o.scallop_mm, o.radius_mm
+        ));
+    }
+    let (lo, hi) = crate::mesh::weld::bounding_box(&surface.positions);
+    let size = (hi - lo).length();
+    if o.radius_mm >= 0.5 * size {
+        return bad(format!(
+            "the ball (radius {} mm) is larger than the part (bounding-box diagonal {:.3} mm): choose a smaller tool",
+            o.radius_mm, size
+        ));
+    }
+    Ok(())
+}
+
+/// The path figures of the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathSummary {
+    pub length_mm: f64,
+    pub points: usize,
+    pub retractions: usize,
+    pub max_turn_deg: f64,
+    pub rho2: f64,
+    pub time_min: f64,
+}
+
+/// The options as the report shows them (plain values, the CLI's names).
+#[derive(Debug, Clone, Serialize)]
+pub struct OptionsReport {
+    pub radius_mm: f64,
+    pub scallop_mm: f64,
+    pub origin: String,
+    pub direction: Direction,
+    pub cut: Cut,
+    pub axes: u8,
+    pub lead_deg: Option<f64>,
+    pub tilt_deg: Option<f64>,
+    pub post: &'static str,
+    pub feed_mm_min: f64,
+    pub plunge_feed_mm_min: f64,
+    pub spindle_rpm: f64,
+    pub safe_z_mm: Option<f64>,
+    pub verify_samples: usize,
+}
+
+impl OptionsReport {
+    fn new(o: &PlanOptions) -> Self {
+        let (axes, lead_deg, tilt_deg) = match o.axes {
+            Axes::Three { .. } => (3, None, None),
+            Axes::Five { lead_deg, tilt_deg } => (5, Some(lead_deg), Some(tilt_deg)),
+        };
+        Self {
+            radius_mm: o.radius_mm,
+            scallop_mm: o.scallop_mm,
+            origin: origin_name(&o.origin),
+            direction: o.direction,
+            cut: o.cut,
+            axes,
+            lead_deg,
+            tilt_deg,
+            post: o.post.name(),
+            feed_mm_min: o.feed_mm_min,
+            plunge_feed_mm_min: o.plunge_feed_mm_min,
+            spindle_rpm: o.spindle_rpm,
+            safe_z_mm: o.safe_z_mm,
+            verify_samples: o.verify_samples,
+        }
+    }
+}
+
+/// `auto`, `centroid`, `hole:N`, `X,Y,Z` (3D point) or `uv:U,V` (flattened-plane pole).
+pub fn origin_name(o: &OriginChoice) -> String {
+    match o {
+        OriginChoice::Auto => "auto".into(),
+        OriginChoice::Centroid => "centroid".into(),
+        OriginChoice::Hole(n) => format!("hole:{n}"),
+        OriginChoice::Point3d(p) => format!("{},{},{}", p.x, p.y, p.z),
+        OriginChoice::Plane(p) => format!("uv:{},{}", p.x, p.y),
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct OriginReport {
+    pub mode: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub annulus_hole: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inner_radius: Option<f64>,
+    pub pole_uv: [f64; 2],
+    pub pole_3d: [f64; 3],
+    pub e_min: f64,
+    pub e_min_centroid: f64,
+    pub uniformity: f64,
+    pub evaluations: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct VerifyReport {
+    pub samples: usize,
+    pub max_scallop_mm: f64,
+    pub mean_scallop_mm: f64,
+    pub p95_scallop_mm: f64,
+    pub p99_scallop_mm: f64,
+    pub v_max_mm2: f64,
+    pub uncovered_fraction: f64,
+    pub gouges: usize,
+    pub max_gouge_mm: f64,
+    pub ct2: f64,
+    pub max_ct: u32,
+}
+
+/// The plan report (`slitpath plan --report`, and what the page shows).
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanReport {
+    pub options: OptionsReport,
+    pub mesh: MeshReport,
+    pub flatten: FlattenQuality,
+    pub origin: OriginReport,
+    /// Number of rings.
+    pub rings: usize,
+    /// Ring radii |w|, outermost first.
+    pub ring_radii: Vec<f64>,
+    pub path: PathSummary,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verify: Option<VerifyReport>,
+    pub gouge_risk_area_mm2: f64,
+    pub flipped_triangles: usize,
+    pub timings_ms: Timings,
+}
+
+impl PlanReport {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        planner: &Planner,
+        options: &PlanOptions,
+        origin: &Origin,
+        map: &SlitMap,
+        rings: &Rings,
+        path: PathSummary,
+        verification: Option<&Verification>,
+        timings_ms: Timings,
+    ) -> Self {
+        let (mode, annulus_hole, inner_radius) = match map.mode {
+            Mode::Disk => ("disk", None, None),
+            Mode::Annulus { hole, inner_radius } => ("annulus", Some(hole), Some(inner_radius)),
+        };
+        Self {
+            options: OptionsReport::new(options),
+            mesh: planner.report.clone(),
+            flatten: planner.flattening.quality,
+            origin: OriginReport {
+                mode,
+                annulus_hole,
+                inner_radius,
+                pole_uv: origin.pole.to_array(),
+                pole_3d: origin.pole_3d.to_array(),
+                e_min: origin.energy.e_min,
+                e_min_centroid: origin.centroid_energy.e_min,
+                uniformity: origin.energy.uniformity,
+                evaluations: origin.evaluations,
+            },
+            rings: rings.rings.len(),
+            ring_radii: rings.radii(),
+            path,
+            verify: verification.map(|v| VerifyReport {
+                samples: v.samples,
+                max_scallop_mm: v.max_scallop_mm,
+                mean_scallop_mm: v.mean_scallop_mm,
+                p95_scallop_mm: v.p95_scallop_mm,
+                p99_scallop_mm: v.p99_scallop_mm,
+                v_max_mm2: v.v_max_mm2,
+                uncovered_fraction: v.uncovered_fraction,
+                gouges: v.gouges,
+                max_gouge_mm: v.max_gouge_mm,
+                ct2: v.ct2,
+                max_ct: v.max_ct,
+            }),
+            gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,
+            flipped_triangles: map.flipped_triangles(),
+            timings_ms,
+        }
+    }
+}
+
+/// Header lines of the G-code: options and path figures, no timings (deterministic output).
+fn header_lines(o: &PlanOptions, origin: &Origin, rings: &Rings, path: &PathSummary) -> Vec<(String, String)> {
+    let opts = OptionsReport::new(o);
+    let mut lines = vec![
+        ("planner".to_string(), "slitpath conformal slit-map spiral".to_string()),
+        ("ball radius mm".into(), format!("{}", opts.radius_mm)),
+        ("scallop mm".into(), format!("{}", opts.scallop_mm)),
+        ("origin".into(), opts.origin),
+        ("axes".into(), format!("{}", opts.axes)),
+    ];
+    if let (Some(l), Some(t)) = (opts.lead_deg, opts.tilt_deg) {
+        lines.push(("lead tilt deg".into(), format!("{l} {t}")));
+    }
+    lines.extend([
+        ("direction".into(), format!("{:?} {:?}", opts.direction, opts.cut).to_lowercase()),
+        ("pole uv".into(), format!("{:.6} {:.6}", origin.pole.x, origin.pole.y)),
+        ("rings".into(), format!("{}", rings.rings.len())),
+        ("path length mm".into(), format!("{:.3}", path.length_mm)),
+        ("points".into(), format!("{}", path.points)),
+        ("estimated time min".into(), format!("{:.2}", path.time_min)),
+    ]);
+    lines
+}
