@@ -63,7 +63,9 @@ mod inverse;
 
 pub use inverse::{InverseMap, Location};
 
-use crate::linalg::{cotan_laplacian_triplets, cotan_weights_2d, LinalgError, SparseCholesky};
+use crate::linalg::{
+    cotan_laplacian_triplets, cotan_weights_2d, mesh_order, restrict_order, LinalgError, SparseCholesky,
+};
 use crate::num;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
@@ -471,17 +473,21 @@ impl SlitMapSolver {
         let on_boundary: Vec<bool> = loop_of.iter().map(|l| l.is_some()).collect();
         let boundary_edges: Vec<(u32, u32, f64)> =
             weights.iter().copied().filter(|&(i, j, _)| on_boundary[i as usize] || on_boundary[j as usize]).collect();
+        // One AMD order of the mesh graph for both systems (AMD costs about as much as a numeric
+        // factorisation): each takes the order induced on its unknowns, a merged hole at the
+        // place of its last vertex.
+        let order = mesh_order(n, &domain.triangles)?;
         let h_chol = if n_h == 0 {
             // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the type
             // stays simple; it is never used with a non-empty right-hand side.
             SparseCholesky::new(1, &[(0, 0, 1.0)])?
         } else {
-            SparseCholesky::new(n_h, &cotan_laplacian_triplets(&weights, Some(&h_unknown)))?
+            let trip = cotan_laplacian_triplets(&weights, Some(&h_unknown));
+            SparseCholesky::with_order(n_h, &trip, &restrict_order(&order, &h_unknown, n_h))?
         };
 
         // (b) θ_h: Neumann Laplacian with vertex 0 fixed (θ_h = 0 there; the rotation is fixed
-        // afterwards). Which vertex is arbitrary, but pinning a boundary vertex made the
-        // fill-reducing ordering twice as slow to factorise on the beetle.
+        // afterwards).
         let fixed = 0;
         let mut theta_unknown = vec![None; n];
         let mut next = 0usize;
@@ -494,7 +500,8 @@ impl SlitMapSolver {
         let theta_chol = if next == 0 {
             SparseCholesky::new(1, &[(0, 0, 1.0)])?
         } else {
-            SparseCholesky::new(next, &cotan_laplacian_triplets(&weights, Some(&theta_unknown)))?
+            let trip = cotan_laplacian_triplets(&weights, Some(&theta_unknown));
+            SparseCholesky::with_order(next, &trip, &restrict_order(&order, &theta_unknown, next))?
         };
 
         let hole_pole = domain.loops[1..].iter().map(|lp| inscribed_centre(&domain.positions, lp)).collect();
