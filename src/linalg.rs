@@ -446,8 +446,8 @@ fn dense_llt_panel(a: &mut [f64], rows: usize, cols: usize) -> Result<(), usize>
             }
         }
         let d = cc[0];
-        // `!(d > 0)` also catches NaN.
-        if !(d > 0.0) {
+        // Not `d <= 0`: NaN must fail too.
+        if d.is_nan() || d <= 0.0 {
             return Err(c);
         }
         let ljj = d.sqrt();

@@ -51,9 +51,19 @@
 //! angular extents. No flipped image triangle on the disk and annulus oracles; on general domains
 //! a P1 map can flip a few sliver triangles ([`SlitMap::flipped_faces`]) in two known places:
 //! * at a slit tip: F has a critical point on the hole boundary there (the boundary folds back
-//!   along the arc), and a boundary edge straddling it maps to two nearly coincident points;
+//!   along the arc), so the hole vertex of extreme angle must be surrounded by image triangles
+//!   sweeping nearly 2π; with the 2–3 triangles such vertices have on the shared meshes no P1
+//!   map on this triangulation can do that without a fold (a fix needs a pole-dependent local
+//!   refinement at the tip, not a different solve);
+//! * "ears" of the outer loop (a triangle with three outer-loop vertices): their images are
+//!   inscribed in the unit circle and flip when the discrete conjugate reorders the angles;
 //! * under crowding: for a pole very close to the boundary, the far part of the domain maps to a
 //!   sliver near |w| = 1 whose triangles are smaller than the P1 error.
+//!
+//! # Determinism
+//! Both factorisations and every solve run in [`crate::linalg`]'s scalar code and all
+//! transcendental functions go through [`crate::num`], so `w` has the same bits natively and in
+//! wasm (`tests/determinism.rs` and `tests/wasm.rs` check digests of it).
 //!
 //! The inverse map (slit domain → mesh) is point location in the image triangles plus barycentric
 //! interpolation ([`InverseMap`], seed 000 §2.1); [`SlitMap::log_polar_corners`] gives the
