@@ -11,7 +11,11 @@ fn main() {
     let start = Instant::now();
     let now = || start.elapsed().as_secs_f64() * 1e3;
     let mut cases = conformal_cases();
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
+    // `../shared` beside the main checkout; a worktree elsewhere finds the machine's copy.
+    let dir = [std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes"), "/work/shared/meshes".into()]
+        .into_iter()
+        .find(|d| d.is_dir())
+        .unwrap_or_default();
     for name in ["beetle.stl", "face_holes.stl", "inverted_triangles.stl", "wavy_mesh_with_hole.stl"] {
         match std::fs::read(dir.join(name)) {
             Ok(bytes) => cases.push((name.to_string(), stl::read(&bytes, usize::MAX).expect("valid STL"))),

@@ -1,21 +1,27 @@
 //! Sparse linear algebra shared by the numeric stages (slit map, flattening).
 //!
-//! * [`SparseCholesky`]: a sparse symmetric positive-definite system factorised once with faer's
-//!   sparse LLᵀ (AMD fill-reducing ordering, simplicial or supernodal chosen by faer), then solved
-//!   many times. The symbolic analysis is kept so a matrix with the same pattern but new values
-//!   is refactorised cheaply ([`SparseCholesky::refactor`]).
+//! * [`SparseCholesky`]: a sparse symmetric positive-definite system factorised once, then solved
+//!   many times: faer's symbolic analysis (AMD ordering, supernodes) and a scalar supernodal LLᵀ
+//!   of our own, bit-identical on every target (native SIMD/FMA kernels are not). The symbolic
+//!   analysis is kept so a matrix with the same pattern but new values is refactorised cheaply
+//!   ([`SparseCholesky::refactor`]).
 //! * [`cotan_weights`] and [`cotan_laplacian_triplets`]: the P1 finite-element (cotan) Laplacian
 //!   of a triangle mesh, with optional merging of vertices into shared unknowns and elimination of
 //!   Dirichlet vertices.
 //!
-//! Everything is deterministic: triplets are sorted before assembly, faer runs sequentially (no
-//! rayon, so the same code builds for `wasm32-unknown-unknown`).
+//! Everything is deterministic: triplets are sorted before assembly, every floating-point sum runs
+//! in a fixed order with plain `+ − × ÷ sqrt` (no `mul_add`, no run-time SIMD dispatch), so the
+//! results are the same bits natively and in wasm.
 
-use faer::linalg::solvers::SolveCore;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Side};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::Side;
 use glam::DVec3;
+use std::sync::Arc;
 
 /// Errors of the sparse solvers. Each variant names what is at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -24,7 +30,7 @@ pub enum LinalgError {
     /// (e.g. a pure Neumann Laplacian without a fixed vertex, or a disconnected unknown).
     #[error("matrix is not positive definite (non-positive pivot at elimination step {pivot})")]
     NotPositiveDefinite {
-        /// Elimination step (in faer's fill-reducing order) of the failing pivot.
+        /// Elimination step (in the fill-reducing order) of the failing pivot.
         pivot: usize,
     },
     /// A triplet refers to a row or column outside the `n × n` matrix.
@@ -39,32 +45,72 @@ pub enum LinalgError {
     /// The matrix is empty (n = 0).
     #[error("matrix has no rows")]
     Empty,
-    /// Any other faer failure (allocation, ...).
+    /// The matrix is too large for 32-bit indices (more than 2³² − 1 rows or stored entries).
+    #[error("matrix too large: {what} exceeds 32-bit indices")]
+    TooLarge { what: &'static str },
+    /// A given elimination order is not a permutation of the unknowns.
+    #[error("elimination order of length {len} is not a permutation of 0..{n}")]
+    BadOrder { len: usize, n: usize },
+    /// faer's symbolic analysis failed (allocation).
     #[error("faer: {0}")]
     Faer(String),
 }
 
-/// Sparse symmetric positive-definite system with a reusable factorisation (faer sparse LLT,
-/// AMD-type fill-reducing ordering): symbolic once, numeric once, then many solves.
+/// Sparse symmetric positive-definite system with a reusable factorisation: symbolic once,
+/// numeric once, then many solves; bit-identical results on every target.
+///
+/// The fill-reducing ordering (AMD) and the supernodal structure come from faer's symbolic
+/// analysis (integer work, run with `u32` indices so that 32- and 64-bit targets agree). The
+/// numeric factorisation (left-looking supernodal LLᵀ) and the triangular solves are plain scalar
+/// Rust in a fixed loop order, with no `mul_add`: faer's dense kernels dispatch at run time to
+/// SIMD/FMA code natively and to scalar code in wasm, which changes the rounding of the sums, so
+/// the page and the CLI would otherwise disagree in the last bits (and in the G-code).
 #[derive(Debug, Clone)]
 pub struct SparseCholesky {
+    symbolic: Arc<Symbolic>,
+    /// Supernode blocks of L, column-major, at `symbolic.val_ptr[s]`.
+    values: Vec<f64>,
+}
+
+/// The integer part of a factorisation: pattern of A, ordering, supernodes, scatter maps.
+#[derive(Debug)]
+struct Symbolic {
     n: usize,
-    /// Lower-triangle CSC pattern (rows sorted within each column), kept to assemble new values.
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    symbolic: SymbolicLlt<usize>,
-    llt: Llt<usize, f64>,
+    /// Lower-triangle CSC pattern of A (original indices, rows sorted), to check `refactor`.
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    /// `perm[k]` = original index of elimination step k.
+    perm: Vec<u32>,
+    /// Supernode s holds the (permuted) columns `sn_begin[s]..sn_begin[s + 1]`.
+    sn_begin: Vec<u32>,
+    /// Rows below the diagonal block of supernode s (permuted, sorted): `pat[pat_ptr[s]..pat_ptr[s + 1]]`.
+    pat_ptr: Vec<usize>,
+    pat: Vec<u32>,
+    /// Block of supernode s in `values`: `val_ptr[s]..val_ptr[s + 1]`, leading dimension = rows.
+    val_ptr: Vec<usize>,
+    /// Supernodes that update supernode s (ascending): `upd[upd_ptr[s]..upd_ptr[s + 1]]`.
+    upd_ptr: Vec<usize>,
+    upd: Vec<u32>,
+    /// Position in `values` of every stored lower entry of A (CSC order).
+    a_to_l: Vec<usize>,
+    /// Largest `rows × cols` of an update block (workspace size).
+    max_update: usize,
 }
 
 /// Lower triangle (row ≥ col) of the triplets in CSC form, duplicates summed.
 struct LowerCsc {
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
     values: Vec<f64>,
 }
 
 fn assemble_lower(n: usize, triplets: &[(usize, usize, f64)]) -> Result<LowerCsc, LinalgError> {
-    let mut lower: Vec<(usize, usize, f64)> = Vec::with_capacity(triplets.len() / 2 + n);
+    if n >= u32::MAX as usize {
+        return Err(LinalgError::TooLarge { what: "the number of rows" });
+    }
+    // Counting sort by column (stable), then each column by row (stable): duplicates are summed
+    // in the order they were given, whatever the target.
+    let mut count = vec![0usize; n + 1];
     for &(row, col, value) in triplets {
         if row >= n || col >= n {
             return Err(LinalgError::BadIndex { row, col, n });
@@ -74,78 +120,421 @@ fn assemble_lower(n: usize, triplets: &[(usize, usize, f64)]) -> Result<LowerCsc
         }
         // Both triangles are given: the upper one is redundant for a symmetric matrix.
         if row >= col {
-            lower.push((col, row, value));
-        }
-    }
-    // Stable sort keeps the summation order of duplicates deterministic.
-    lower.sort_by_key(|a| (a.0, a.1));
-    let mut col_ptr = vec![0usize; n + 1];
-    let mut row_idx = Vec::with_capacity(lower.len());
-    let mut values: Vec<f64> = Vec::with_capacity(lower.len());
-    let mut last: Option<(usize, usize)> = None;
-    for (col, row, value) in lower {
-        if last == Some((col, row)) {
-            *values.last_mut().expect("a previous entry exists") += value;
-        } else {
-            row_idx.push(row);
-            values.push(value);
-            col_ptr[col + 1] += 1;
-            last = Some((col, row));
+            count[col + 1] += 1;
         }
     }
     for c in 0..n {
-        col_ptr[c + 1] += col_ptr[c];
+        count[c + 1] += count[c];
+    }
+    if count[n] >= u32::MAX as usize {
+        return Err(LinalgError::TooLarge { what: "the number of stored entries" });
+    }
+    let mut bucket: Vec<(u32, f64)> = vec![(0, 0.0); count[n]];
+    let mut next = count.clone();
+    for &(row, col, value) in triplets {
+        if row >= col {
+            bucket[next[col]] = (row as u32, value);
+            next[col] += 1;
+        }
+    }
+    let mut col_ptr = vec![0u32; n + 1];
+    let mut row_idx = Vec::with_capacity(bucket.len());
+    let mut values: Vec<f64> = Vec::with_capacity(bucket.len());
+    for c in 0..n {
+        let column = &mut bucket[count[c]..count[c + 1]];
+        column.sort_by_key(|e| e.0);
+        let mut last = None;
+        for &(row, value) in column.iter() {
+            if last == Some(row) {
+                *values.last_mut().expect("a previous entry exists") += value;
+            } else {
+                row_idx.push(row);
+                values.push(value);
+                last = Some(row);
+            }
+        }
+        col_ptr[c + 1] = row_idx.len() as u32;
     }
     Ok(LowerCsc { col_ptr, row_idx, values })
 }
 
-fn map_llt_error(e: faer::sparse::linalg::LltError) -> LinalgError {
-    match e {
-        faer::sparse::linalg::LltError::Numeric(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot {
-            index,
-        }) => LinalgError::NotPositiveDefinite { pivot: index },
-        faer::sparse::linalg::LltError::Generic(g) => LinalgError::Faer(format!("{g:?}")),
+impl Symbolic {
+    /// `order`: elimination order to use (`order[k]` = unknown eliminated at step k), or AMD's.
+    fn new(n: usize, col_ptr: Vec<u32>, row_idx: Vec<u32>, order: Option<&[u32]>) -> Result<Self, LinalgError> {
+        let faer_err = |e: faer::sparse::FaerError| LinalgError::Faer(format!("{e:?}"));
+        let a = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let inverse: Vec<u32>;
+        let ordering = match order {
+            None => SymmetricOrdering::Amd,
+            Some(fwd) => {
+                inverse = invert_order(fwd, n)?;
+                SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inverse, n))
+            }
+        };
+        let sym = factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(faer_err)?;
+        let (perm, perm_inv): (Vec<u32>, Vec<u32>) = match sym.perm() {
+            Some(p) => {
+                let (fwd, inv) = p.arrays();
+                (fwd.to_vec(), inv.to_vec())
+            }
+            None => ((0..n as u32).collect(), (0..n as u32).collect()),
+        };
+        // Supernode begins and below-diagonal patterns. faer still picks the simplicial structure
+        // when there is no work at all (e.g. a diagonal matrix): then every column is a supernode.
+        let (mut sn_begin, patterns): (Vec<u32>, Vec<&[u32]>) = match sym.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) => {
+                (sn.supernode_begin().to_vec(), (0..sn.n_supernodes()).map(|s| sn.supernode(s).pattern()).collect())
+            }
+            SymbolicCholeskyRaw::Simplicial(sp) => {
+                let f = sp.factor();
+                let below = |j: usize| {
+                    let rows = f.row_idx_of_col_raw(j);
+                    &rows[rows.partition_point(|&r| r as usize <= j)..]
+                };
+                ((0..n as u32).collect(), (0..n).map(below).collect())
+            }
+        };
+        let ns = sn_begin.len();
+        sn_begin.push(n as u32);
+        let mut pat_ptr = Vec::with_capacity(ns + 1);
+        let mut pat: Vec<u32> = Vec::new();
+        let mut val_ptr = Vec::with_capacity(ns + 1);
+        pat_ptr.push(0);
+        val_ptr.push(0usize);
+        for (s, p) in patterns.iter().enumerate() {
+            let start = pat.len();
+            pat.extend_from_slice(p);
+            pat[start..].sort_unstable();
+            pat_ptr.push(pat.len());
+            let cols = (sn_begin[s + 1] - sn_begin[s]) as usize;
+            let rows = cols + p.len();
+            val_ptr.push(val_ptr[s] + rows * cols);
+        }
+        // Supernode of every permuted column.
+        let mut sn_of = vec![0u32; n];
+        for s in 0..ns {
+            for c in sn_begin[s]..sn_begin[s + 1] {
+                sn_of[c as usize] = s as u32;
+            }
+        }
+        // Who updates whom: d updates every supernode its pattern rows fall in. Listing the pairs
+        // by d and bucketing them by target keeps each target's list ascending in d.
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut max_update = 0usize;
+        for d in 0..ns {
+            let p = &pat[pat_ptr[d]..pat_ptr[d + 1]];
+            let mut k = 0;
+            while k < p.len() {
+                let t = sn_of[p[k] as usize];
+                let end = sn_begin[t as usize + 1];
+                let k2 = k + p[k..].partition_point(|&r| r < end);
+                max_update = max_update.max((p.len() - k) * (k2 - k));
+                pairs.push((t, d as u32));
+                k = k2;
+            }
+        }
+        let mut upd_ptr = vec![0usize; ns + 1];
+        for &(t, _) in &pairs {
+            upd_ptr[t as usize + 1] += 1;
+        }
+        for s in 0..ns {
+            upd_ptr[s + 1] += upd_ptr[s];
+        }
+        let mut fill = upd_ptr.clone();
+        let mut upd = vec![0u32; pairs.len()];
+        for &(t, d) in &pairs {
+            upd[fill[t as usize]] = d;
+            fill[t as usize] += 1;
+        }
+        // Where each entry of A lands in L.
+        let mut a_to_l = Vec::with_capacity(row_idx.len());
+        for c in 0..n {
+            for &r in &row_idx[col_ptr[c] as usize..col_ptr[c + 1] as usize] {
+                let (pr, pc) = (perm_inv[r as usize], perm_inv[c]);
+                let (row, col) = (pr.max(pc), pr.min(pc));
+                let s = sn_of[col as usize] as usize;
+                let (b, e) = (sn_begin[s], sn_begin[s + 1]);
+                let cols = (e - b) as usize;
+                let p = &pat[pat_ptr[s]..pat_ptr[s + 1]];
+                let local = if row < e {
+                    (row - b) as usize
+                } else {
+                    cols + p
+                        .binary_search(&row)
+                        .map_err(|_| LinalgError::Faer("entry outside the symbolic pattern".into()))?
+                };
+                a_to_l.push(val_ptr[s] + (col - b) as usize * (cols + p.len()) + local);
+            }
+        }
+        Ok(Self { n, col_ptr, row_idx, perm, sn_begin, pat_ptr, pat, val_ptr, upd_ptr, upd, a_to_l, max_update })
     }
+
+    fn n_supernodes(&self) -> usize {
+        self.sn_begin.len() - 1
+    }
+
+    /// Left-looking supernodal LLᵀ of the lower-triangle values `a` (CSC order of `row_idx`).
+    fn factorise(&self, a: &[f64]) -> Result<Vec<f64>, LinalgError> {
+        let mut l = vec![0.0; *self.val_ptr.last().expect("val_ptr is never empty")];
+        for (&pos, &v) in self.a_to_l.iter().zip(a) {
+            l[pos] += v;
+        }
+        // Local row of a global (permuted) row in the current target supernode.
+        let mut rel = vec![0u32; self.n];
+        let mut work = vec![0.0; self.max_update];
+        for s in 0..self.n_supernodes() {
+            let (b, e) = (self.sn_begin[s], self.sn_begin[s + 1]);
+            let cols = (e - b) as usize;
+            let pat = &self.pat[self.pat_ptr[s]..self.pat_ptr[s + 1]];
+            let rows = cols + pat.len();
+            for i in 0..cols {
+                rel[b as usize + i] = i as u32;
+            }
+            for (k, &r) in pat.iter().enumerate() {
+                rel[r as usize] = (cols + k) as u32;
+            }
+            let (done, rest) = l.split_at_mut(self.val_ptr[s]);
+            let target = &mut rest[..rows * cols];
+            for &d in &self.upd[self.upd_ptr[s]..self.upd_ptr[s + 1]] {
+                let d = d as usize;
+                let dcols = (self.sn_begin[d + 1] - self.sn_begin[d]) as usize;
+                let dpat = &self.pat[self.pat_ptr[d]..self.pat_ptr[d + 1]];
+                let drows = dcols + dpat.len();
+                let k1 = dpat.partition_point(|&r| r < b);
+                let k2 = k1 + dpat[k1..].partition_point(|&r| r < e);
+                let (m, k) = (dpat.len() - k1, k2 - k1);
+                let ld = &done[self.val_ptr[d]..self.val_ptr[d] + drows * dcols];
+                let first = dcols + k1;
+                if dcols == 1 {
+                    // One column: subtract the outer product directly.
+                    let col = &ld[first..drows];
+                    for jj in 0..k {
+                        let f = col[jj];
+                        let tc = (dpat[k1 + jj] - b) as usize;
+                        let tcol = &mut target[tc * rows..(tc + 1) * rows];
+                        for ii in jj..m {
+                            tcol[rel[dpat[k1 + ii] as usize] as usize] -= col[ii] * f;
+                        }
+                    }
+                    continue;
+                }
+                // W = L_d[k1.., :] · L_d[k1..k2, :]ᵀ (lower trapezoid), each entry summed over the
+                // columns of d in ascending order.
+                let w = &mut work[..m * k];
+                w.fill(0.0);
+                let column = |t: usize| &ld[t * drows + first..(t + 1) * drows];
+                let mut t = 0;
+                while t + 4 <= dcols {
+                    let c = [column(t), column(t + 1), column(t + 2), column(t + 3)];
+                    for jj in 0..k {
+                        let f = [c[0][jj], c[1][jj], c[2][jj], c[3][jj]];
+                        add_products4(&mut w[jj * m + jj..(jj + 1) * m], c.map(|ci| &ci[jj..]), f);
+                    }
+                    t += 4;
+                }
+                for t in t..dcols {
+                    let c = column(t);
+                    for jj in 0..k {
+                        let f = c[jj];
+                        for (wv, &x) in w[jj * m + jj..(jj + 1) * m].iter_mut().zip(&c[jj..]) {
+                            *wv += x * f;
+                        }
+                    }
+                }
+                for jj in 0..k {
+                    let tc = (dpat[k1 + jj] - b) as usize;
+                    let tcol = &mut target[tc * rows..(tc + 1) * rows];
+                    let wc = &w[jj * m..(jj + 1) * m];
+                    for ii in jj..m {
+                        tcol[rel[dpat[k1 + ii] as usize] as usize] -= wc[ii];
+                    }
+                }
+            }
+            dense_llt_panel(target, rows, cols)
+                .map_err(|j| LinalgError::NotPositiveDefinite { pivot: b as usize + j })?;
+        }
+        Ok(l)
+    }
+
+    /// Solves L Lᵀ y = y in the permuted numbering.
+    fn solve_permuted(&self, l: &[f64], y: &mut [f64]) {
+        let ns = self.n_supernodes();
+        for s in 0..ns {
+            let (b, cols, pat, blk) = self.block(l, s);
+            let rows = cols + pat.len();
+            for j in 0..cols {
+                let col = &blk[j * rows..(j + 1) * rows];
+                let yj = y[b + j] / col[j];
+                y[b + j] = yj;
+                for i in j + 1..cols {
+                    y[b + i] -= col[i] * yj;
+                }
+                for (k, &r) in pat.iter().enumerate() {
+                    y[r as usize] -= col[cols + k] * yj;
+                }
+            }
+        }
+        for s in (0..ns).rev() {
+            let (b, cols, pat, blk) = self.block(l, s);
+            let rows = cols + pat.len();
+            for j in (0..cols).rev() {
+                let col = &blk[j * rows..(j + 1) * rows];
+                let mut sum = y[b + j];
+                for i in j + 1..cols {
+                    sum -= col[i] * y[b + i];
+                }
+                for (k, &r) in pat.iter().enumerate() {
+                    sum -= col[cols + k] * y[r as usize];
+                }
+                y[b + j] = sum / col[j];
+            }
+        }
+    }
+
+    /// (first column, column count, pattern below the diagonal block, block values) of supernode s.
+    fn block<'a>(&'a self, l: &'a [f64], s: usize) -> (usize, usize, &'a [u32], &'a [f64]) {
+        let b = self.sn_begin[s] as usize;
+        let cols = self.sn_begin[s + 1] as usize - b;
+        (b, cols, &self.pat[self.pat_ptr[s]..self.pat_ptr[s + 1]], &l[self.val_ptr[s]..self.val_ptr[s + 1]])
+    }
+}
+
+/// `w[i] = (((w[i] + c0[i]·f0) + c1[i]·f1) + c2[i]·f2) + c3[i]·f3`: four rank-one steps in one
+/// pass, in the same order as four separate passes (so the same bits), a quarter of the traffic.
+#[inline]
+fn add_products4(w: &mut [f64], c: [&[f64]; 4], f: [f64; 4]) {
+    let n = w.len();
+    let (c0, c1, c2, c3) = (&c[0][..n], &c[1][..n], &c[2][..n], &c[3][..n]);
+    for i in 0..n {
+        w[i] = w[i] + c0[i] * f[0] + c1[i] * f[1] + c2[i] * f[2] + c3[i] * f[3];
+    }
+}
+
+/// `w[i] = (((w[i] − c0[i]·f0) − c1[i]·f1) − …)`, as [`add_products4`].
+#[inline]
+fn sub_products4(w: &mut [f64], c: [&[f64]; 4], f: [f64; 4]) {
+    let n = w.len();
+    let (c0, c1, c2, c3) = (&c[0][..n], &c[1][..n], &c[2][..n], &c[3][..n]);
+    for i in 0..n {
+        w[i] = w[i] - c0[i] * f[0] - c1[i] * f[1] - c2[i] * f[2] - c3[i] * f[3];
+    }
+}
+
+/// In-place LLᵀ of the `cols × cols` diagonal block of a column-major `rows × cols` panel, and
+/// `L_below = A_below · L⁻ᵀ` for the rows under it (left-looking, one column at a time, earlier
+/// columns applied in ascending order). `Err(j)` when pivot j is not positive.
+fn dense_llt_panel(a: &mut [f64], rows: usize, cols: usize) -> Result<(), usize> {
+    for c in 0..cols {
+        let (left, right) = a.split_at_mut(c * rows);
+        let cc = &mut right[c..rows];
+        let column = |j: usize| &left[j * rows + c..(j + 1) * rows];
+        let mut j = 0;
+        while j + 4 <= c {
+            let l = [column(j), column(j + 1), column(j + 2), column(j + 3)];
+            sub_products4(cc, l, [l[0][0], l[1][0], l[2][0], l[3][0]]);
+            j += 4;
+        }
+        for j in j..c {
+            let l = column(j);
+            let f = l[0];
+            for (v, &x) in cc.iter_mut().zip(l) {
+                *v -= x * f;
+            }
+        }
+        let d = cc[0];
+        // Not `d <= 0`: NaN must fail too.
+        if d.is_nan() || d <= 0.0 {
+            return Err(c);
+        }
+        let ljj = d.sqrt();
+        cc[0] = ljj;
+        for v in &mut cc[1..] {
+            *v /= ljj;
+        }
+    }
+    Ok(())
 }
 
 impl SparseCholesky {
     /// `triplets` (row, col, value) of the full symmetric matrix (both triangles given; duplicates
     /// summed). Only the lower triangle is read: symmetry is the caller's promise.
     pub fn new(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, LinalgError> {
+        Self::build(n, triplets, None)
+    }
+
+    /// As [`SparseCholesky::new`] with a given elimination order (`order[k]` = unknown eliminated
+    /// at step k, a permutation of `0..n`), e.g. one AMD order of a mesh shared by the related
+    /// systems on it ([`amd_order`], [`restrict_order`]): AMD costs about as much as the numeric
+    /// factorisation.
+    pub fn with_order(n: usize, triplets: &[(usize, usize, f64)], order: &[u32]) -> Result<Self, LinalgError> {
+        Self::build(n, triplets, Some(order))
+    }
+
+    fn build(n: usize, triplets: &[(usize, usize, f64)], order: Option<&[u32]>) -> Result<Self, LinalgError> {
         if n == 0 {
             return Err(LinalgError::Empty);
         }
         let csc = assemble_lower(n, triplets)?;
-        let sym = SymbolicSparseColMatRef::new_checked(n, n, &csc.col_ptr, None, &csc.row_idx);
-        let symbolic = SymbolicLlt::try_new(sym, Side::Lower).map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
-        let mat = SparseColMatRef::new(sym, &csc.values);
-        let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower).map_err(map_llt_error)?;
-        Ok(Self { n, col_ptr: csc.col_ptr, row_idx: csc.row_idx, symbolic, llt })
+        let symbolic = Arc::new(Symbolic::new(n, csc.col_ptr, csc.row_idx, order)?);
+        let values = symbolic.factorise(&csc.values)?;
+        Ok(Self { symbolic, values })
     }
 
     /// New numeric values with the same sparsity pattern (reuses the symbolic analysis).
     /// On error the previous factorisation is kept.
     pub fn refactor(&mut self, triplets: &[(usize, usize, f64)]) -> Result<(), LinalgError> {
-        let csc = assemble_lower(self.n, triplets)?;
-        if csc.col_ptr != self.col_ptr || csc.row_idx != self.row_idx {
+        let csc = assemble_lower(self.symbolic.n, triplets)?;
+        if csc.col_ptr != self.symbolic.col_ptr || csc.row_idx != self.symbolic.row_idx {
             return Err(LinalgError::PatternMismatch {
-                detail: format!("{} stored lower-triangle entries, {} given", self.row_idx.len(), csc.row_idx.len()),
+                detail: format!(
+                    "{} stored lower-triangle entries, {} given",
+                    self.symbolic.row_idx.len(),
+                    csc.row_idx.len()
+                ),
             });
         }
-        let sym = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let mat = SparseColMatRef::new(sym, &csc.values);
-        self.llt = Llt::try_new_with_symbolic(self.symbolic.clone(), mat, Side::Lower).map_err(map_llt_error)?;
+        self.values = self.symbolic.factorise(&csc.values)?;
         Ok(())
+    }
+
+    /// The elimination order used (`order[k]` = unknown eliminated at step k).
+    pub fn order(&self) -> &[u32] {
+        &self.symbolic.perm
     }
 
     /// Number of unknowns.
     pub fn n(&self) -> usize {
-        self.n
+        self.symbolic.n
     }
 
     /// Number of stored lower-triangle entries of the assembled matrix (not of the factor).
     pub fn nnz_lower(&self) -> usize {
-        self.row_idx.len()
+        self.symbolic.row_idx.len()
+    }
+
+    /// Number of stored entries of the factor L (supernode blocks, explicit zeros included).
+    pub fn nnz_factor(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Multiply-adds of the numeric factorisation, Σ over columns of (entries below the diagonal)²
+    /// / 2 (explicit zeros of merged supernodes included): a machine-independent cost figure.
+    pub fn factor_flops(&self) -> f64 {
+        let sym = &self.symbolic;
+        let mut f = 0.0;
+        for s in 0..sym.n_supernodes() {
+            let cols = (sym.sn_begin[s + 1] - sym.sn_begin[s]) as usize;
+            let rows = cols + sym.pat_ptr[s + 1] - sym.pat_ptr[s];
+            for j in 0..cols {
+                let below = (rows - j - 1) as f64;
+                f += 0.5 * below * (below + 1.0);
+            }
+        }
+        f
     }
 
     /// Solves A x = rhs, overwriting `rhs` with x.
@@ -153,31 +542,113 @@ impl SparseCholesky {
     /// # Panics
     /// If `rhs.len() != self.n()` (a programming error, not a data error).
     pub fn solve_in_place(&self, rhs: &mut [f64]) {
-        assert_eq!(rhs.len(), self.n, "right-hand side length must equal n");
-        let m = MatMut::from_column_major_slice_mut(rhs, self.n, 1);
-        self.llt.solve_in_place_with_conj(Conj::No, m);
+        let sym = &self.symbolic;
+        assert_eq!(rhs.len(), sym.n, "right-hand side length must equal n");
+        let mut y: Vec<f64> = sym.perm.iter().map(|&o| rhs[o as usize]).collect();
+        sym.solve_permuted(&self.values, &mut y);
+        for (k, &o) in sym.perm.iter().enumerate() {
+            rhs[o as usize] = y[k];
+        }
     }
 
-    /// Solves for several right-hand sides at once (one blocked back-substitution).
+    /// Solves for several right-hand sides (each as [`SparseCholesky::solve_in_place`]).
     ///
     /// # Panics
     /// If a column's length differs from `self.n()`.
     pub fn solve_many_in_place(&self, rhs_columns: &mut [Vec<f64>]) {
-        let k = rhs_columns.len();
-        if k == 0 {
-            return;
-        }
-        let mut buf = Vec::with_capacity(self.n * k);
-        for c in rhs_columns.iter() {
-            assert_eq!(c.len(), self.n, "right-hand side length must equal n");
-            buf.extend_from_slice(c);
-        }
-        let m = MatMut::from_column_major_slice_mut(&mut buf, self.n, k);
-        self.llt.solve_in_place_with_conj(Conj::No, m);
-        for (j, c) in rhs_columns.iter_mut().enumerate() {
-            c.copy_from_slice(&buf[j * self.n..(j + 1) * self.n]);
+        for c in rhs_columns.iter_mut() {
+            self.solve_in_place(c);
         }
     }
+}
+
+/// `inverse[order[k]] = k`; an error unless `order` is a permutation of `0..n`.
+fn invert_order(order: &[u32], n: usize) -> Result<Vec<u32>, LinalgError> {
+    let bad = || LinalgError::BadOrder { len: order.len(), n };
+    if order.len() != n {
+        return Err(bad());
+    }
+    let mut inverse = vec![u32::MAX; n];
+    for (k, &v) in order.iter().enumerate() {
+        match inverse.get_mut(v as usize) {
+            Some(slot) if *slot == u32::MAX => *slot = k as u32,
+            _ => return Err(bad()),
+        }
+    }
+    Ok(inverse)
+}
+
+/// AMD order of the vertex graph of a triangle mesh (`n` vertices, the triangles' edges),
+/// memoised per thread for the last mesh asked: `flatten` and `slitmap` order the same graph, and
+/// AMD costs about as much as a numeric factorisation. The result depends only on the input, so
+/// the cache changes no output. No triangles: the identity order, and the cache is emptied
+/// (benchmarks use that to time a cold start).
+pub fn mesh_order(n: usize, triangles: &[[u32; 3]]) -> Result<Arc<Vec<u32>>, LinalgError> {
+    type Entry = (usize, Vec<[u32; 3]>, Arc<Vec<u32>>);
+    thread_local! {
+        static LAST: std::cell::RefCell<Option<Entry>> = const { std::cell::RefCell::new(None) };
+    }
+    if triangles.is_empty() {
+        LAST.with(|c| *c.borrow_mut() = None);
+        return Ok(Arc::new((0..n as u32).collect()));
+    }
+    let hit = LAST.with(|c| match &*c.borrow() {
+        Some((m, t, order)) if *m == n && t.as_slice() == triangles => Some(order.clone()),
+        _ => None,
+    });
+    if let Some(order) = hit {
+        return Ok(order);
+    }
+    let mut pattern = Vec::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            pattern.push((a.max(b), a.min(b), 0.0));
+        }
+    }
+    let order = Arc::new(amd_order(n, &pattern)?);
+    LAST.with(|c| *c.borrow_mut() = Some((n, triangles.to_vec(), order.clone())));
+    Ok(order)
+}
+
+/// AMD fill-reducing elimination order of the symmetric pattern of `triplets` (`n × n`, values
+/// ignored): `order[k]` = unknown eliminated at step k.
+pub fn amd_order(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Vec<u32>, LinalgError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::sparse::linalg::amd;
+    if n == 0 {
+        return Err(LinalgError::Empty);
+    }
+    let csc = assemble_lower(n, triplets)?;
+    let a = SymbolicSparseColMatRef::new_checked(n, n, &csc.col_ptr, None, &csc.row_idx);
+    let (mut fwd, mut inv) = (vec![0u32; n], vec![0u32; n]);
+    let mut mem = MemBuffer::try_new(amd::order_scratch::<u32>(n, csc.row_idx.len()))
+        .map_err(|_| LinalgError::Faer("out of memory".into()))?;
+    amd::order(&mut fwd, &mut inv, a, amd::Control::default(), MemStack::new(&mut mem))
+        .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+    Ok(fwd)
+}
+
+/// The order of a related system from a vertex order: `unknown[v]` is the unknown of vertex v
+/// (`None`: eliminated from the system, several vertices may share one unknown, as in
+/// [`cotan_laplacian_triplets`]). Each unknown takes the place of its last vertex in
+/// `vertex_order`, so a principal submatrix keeps the induced order (whose fill is a subset of
+/// the full one's). `n_unknowns` = number of distinct unknowns.
+pub fn restrict_order(vertex_order: &[u32], unknown: &[Option<usize>], n_unknowns: usize) -> Vec<u32> {
+    let mut remaining = vec![0u32; n_unknowns];
+    for u in unknown.iter().flatten() {
+        remaining[*u] += 1;
+    }
+    let mut out = Vec::with_capacity(n_unknowns);
+    for &v in vertex_order {
+        if let Some(u) = unknown[v as usize] {
+            remaining[u] -= 1;
+            if remaining[u] == 0 {
+                out.push(u as u32);
+            }
+        }
+    }
+    out
 }
 
 /// Cotan weights: for each interior/boundary edge (i, j) with i < j, w_ij = ½ Σ cot of the
@@ -345,6 +816,47 @@ mod tests {
                 assert!((cols[1][k] - 2.0 * x[k]).abs() < 1e-13);
             }
         }
+    }
+
+    #[test]
+    fn given_orders_give_the_same_solution() {
+        let mut rng = SplitMix(3);
+        let n = 40;
+        let (dense, trip) = random_spd(n, &mut rng);
+        let b: Vec<f64> = (0..n).map(|_| rng.next_f64() - 0.5).collect();
+        let x_ref = dense_solve(dense, b.clone());
+        let reversed: Vec<u32> = (0..n as u32).rev().collect();
+        for order in [amd_order(n, &trip).unwrap(), reversed] {
+            let chol = SparseCholesky::with_order(n, &trip, &order).unwrap();
+            assert_eq!(chol.order(), order.as_slice());
+            let mut x = b.clone();
+            chol.solve_in_place(&mut x);
+            for (u, v) in x.iter().zip(&x_ref) {
+                assert!((u - v).abs() < 1e-12);
+            }
+        }
+        assert_eq!(SparseCholesky::with_order(n, &trip, &[0, 1]).unwrap_err(), LinalgError::BadOrder { len: 2, n });
+        let repeated: Vec<u32> = (0..n as u32).map(|i| i.min(5)).collect();
+        assert!(matches!(SparseCholesky::with_order(n, &trip, &repeated), Err(LinalgError::BadOrder { .. })));
+    }
+
+    #[test]
+    fn restricted_order_places_merged_unknowns_at_their_last_vertex() {
+        // Vertices 0..6, order 3 5 0 4 1 2; unknowns: 0 → a, 1,2 merged → b, 3 eliminated, 4 → c, 5 → d.
+        let unknown = [Some(0), Some(1), Some(1), None, Some(2), Some(3)];
+        assert_eq!(restrict_order(&[3, 5, 0, 4, 1, 2], &unknown, 4), vec![3, 0, 2, 1]);
+    }
+
+    #[test]
+    fn mesh_order_is_a_permutation_and_memoised() {
+        let tri = [[0u32, 1, 2], [0, 2, 3], [0, 3, 4]];
+        let a = mesh_order(5, &tri).unwrap();
+        let mut sorted = a.to_vec();
+        sorted.sort_unstable();
+        assert_eq!(sorted, vec![0, 1, 2, 3, 4]);
+        assert!(Arc::ptr_eq(&a, &mesh_order(5, &tri).unwrap()));
+        assert!(!Arc::ptr_eq(&a, &mesh_order(5, &tri[..2]).unwrap()));
+        assert_eq!(*mesh_order(3, &[]).unwrap(), vec![0, 1, 2]);
     }
 
     #[test]

@@ -332,3 +332,18 @@ fn slit_map_with_a_bad_pole_throws() {
     let err: js_sys::Error = JsValue::from(planner.slit_map_info().unwrap_err()).dyn_into().unwrap();
     assert!(String::from(err.message()).contains("no slit map"));
 }
+
+// --- Cross-target determinism of the conformal core (issue 3) ---------------------------------
+
+#[path = "digest/mod.rs"]
+mod digest;
+
+/// The flattening and the slit maps computed in the browser have the same bits as natively: the
+/// digests are those `tests/determinism.rs` checks in `tests/digest/expected.txt`.
+#[wasm_bindgen_test]
+fn conformal_core_is_bit_identical_to_native() {
+    for name in digest::CASES {
+        let line = digest::digest_line(name);
+        assert_eq!(Some(line.as_str()), digest::expected_line(name), "{name}: wasm differs from native");
+    }
+}

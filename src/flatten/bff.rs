@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 
 use super::{check, quality, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenOptions, Flattening};
-use crate::linalg::{cotan_weights, SparseCholesky};
+use crate::linalg::{cotan_laplacian_triplets, cotan_weights, mesh_order, restrict_order, SparseCholesky};
 use crate::num;
 
 const NONE: u32 = u32::MAX;
@@ -102,50 +102,55 @@ impl BffSolver {
             })
             .collect();
 
-        let mut diag = vec![0.0; n_all];
-        for &(i, j, w) in &weights {
-            diag[i as usize] += w;
-            diag[j as usize] += w;
-        }
-
-        let mut trip = Vec::with_capacity(interior.len() + 2 * weights.len());
-        for (ii, &v) in interior.iter().enumerate() {
-            trip.push((ii, ii, diag[v as usize]));
-        }
-        for &(i, j, w) in &weights {
-            let (ii, jj) = (interior_index[i as usize], interior_index[j as usize]);
-            if ii != NONE && jj != NONE {
-                trip.push((ii as usize, jj as usize, -w));
-                trip.push((jj as usize, ii as usize, -w));
+        // One AMD order of the mesh graph (shared with the slit map of the same mesh, see
+        // `mesh_order`) serves both systems: each hole's virtual vertex follows the last vertex of
+        // its rim, and each system takes the order induced on its unknowns.
+        let order = {
+            let real = mesh_order(n_real, input.triangles)?;
+            let mut left: Vec<usize> = input.loops.iter().map(Vec::len).collect();
+            let mut loop_of = vec![usize::MAX; n_real];
+            for (li, lp) in input.loops.iter().enumerate() {
+                for &v in lp {
+                    loop_of[v as usize] = li;
+                }
             }
-        }
+            let mut order = Vec::with_capacity(n_all);
+            for &v in real.iter() {
+                order.push(v);
+                let li = loop_of[v as usize];
+                if li != usize::MAX && li > 0 {
+                    left[li] -= 1;
+                    if left[li] == 0 {
+                        order.push((n_real + li - 1) as u32);
+                    }
+                }
+            }
+            order
+        };
+
+        let interior_unknown: Vec<Option<usize>> =
+            interior_index.iter().map(|&i| (i != NONE).then_some(i as usize)).collect();
         // A mesh may have no interior vertex at all (a strip): nothing to solve then.
-        let aii = if interior.is_empty() { None } else { Some(SparseCholesky::new(interior.len(), &trip)?) };
+        let aii = if interior.is_empty() {
+            None
+        } else {
+            let trip = cotan_laplacian_triplets(&weights, Some(&interior_unknown));
+            let sub = restrict_order(&order, &interior_unknown, interior.len());
+            Some(SparseCholesky::with_order(interior.len(), &trip, &sub)?)
+        };
 
         // Always built: the conjugate, the disk target and prescribed angles all need it.
         let neumann = {
             let pinned = outer[0] as usize;
-            let idx = |v: u32| -> Option<usize> {
-                let v = v as usize;
-                match v.cmp(&pinned) {
+            let unknown: Vec<Option<usize>> = (0..n_all)
+                .map(|v| match v.cmp(&pinned) {
                     std::cmp::Ordering::Less => Some(v),
                     std::cmp::Ordering::Equal => None,
                     std::cmp::Ordering::Greater => Some(v - 1),
-                }
-            };
-            trip.clear();
-            for (v, &d) in diag.iter().enumerate() {
-                if let Some(i) = idx(v as u32) {
-                    trip.push((i, i, d));
-                }
-            }
-            for &(i, j, w) in &weights {
-                if let (Some(a), Some(b)) = (idx(i), idx(j)) {
-                    trip.push((a, b, -w));
-                    trip.push((b, a, -w));
-                }
-            }
-            SparseCholesky::new(n_all - 1, &trip)?
+                })
+                .collect();
+            let trip = cotan_laplacian_triplets(&weights, Some(&unknown));
+            SparseCholesky::with_order(n_all - 1, &trip, &restrict_order(&order, &unknown, n_all - 1))?
         };
 
         let area3d = input.triangles.iter().map(|t| tri_area3(input.positions, *t)).sum();

@@ -54,7 +54,9 @@ pub fn quality(positions: &[DVec3], triangles: &[[u32; 3]], loops: &[Vec<u32>], 
         ad.mean += a3 * l;
     }
     ad.mean /= a3_sum;
-    ad.std = (per_face.iter().zip(&logs).map(|(&(a3, _), &l)| a3 * (l - ad.mean).powi(2)).sum::<f64>() / a3_sum).sqrt();
+    ad.std = (per_face.iter().zip(&logs).map(|(&(a3, _), &l)| a3 * (l - ad.mean) * (l - ad.mean)).sum::<f64>()
+        / a3_sum)
+        .sqrt();
     FlattenQuality {
         flipped_triangles: flipped,
         qc_mean: qc_sum / a3_sum,

@@ -51,9 +51,19 @@
 //! angular extents. No flipped image triangle on the disk and annulus oracles; on general domains
 //! a P1 map can flip a few sliver triangles ([`SlitMap::flipped_faces`]) in two known places:
 //! * at a slit tip: F has a critical point on the hole boundary there (the boundary folds back
-//!   along the arc), and a boundary edge straddling it maps to two nearly coincident points;
+//!   along the arc), so the hole vertex of extreme angle must be surrounded by image triangles
+//!   sweeping nearly 2π; with the 2–3 triangles such vertices have on the shared meshes no P1
+//!   map on this triangulation can do that without a fold (a fix needs a pole-dependent local
+//!   refinement at the tip, not a different solve);
+//! * "ears" of the outer loop (a triangle with three outer-loop vertices): their images are
+//!   inscribed in the unit circle and flip when the discrete conjugate reorders the angles;
 //! * under crowding: for a pole very close to the boundary, the far part of the domain maps to a
 //!   sliver near |w| = 1 whose triangles are smaller than the P1 error.
+//!
+//! # Determinism
+//! Both factorisations and every solve run in [`crate::linalg`]'s scalar code and all
+//! transcendental functions go through [`crate::num`], so `w` has the same bits natively and in
+//! wasm (`tests/determinism.rs` and `tests/wasm.rs` check digests of it).
 //!
 //! The inverse map (slit domain → mesh) is point location in the image triangles plus barycentric
 //! interpolation ([`InverseMap`], seed 000 §2.1); [`SlitMap::log_polar_corners`] gives the
@@ -63,7 +73,9 @@ mod inverse;
 
 pub use inverse::{InverseMap, Location};
 
-use crate::linalg::{cotan_laplacian_triplets, cotan_weights_2d, LinalgError, SparseCholesky};
+use crate::linalg::{
+    cotan_laplacian_triplets, cotan_weights_2d, mesh_order, restrict_order, LinalgError, SparseCholesky,
+};
 use crate::num;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
@@ -471,17 +483,21 @@ impl SlitMapSolver {
         let on_boundary: Vec<bool> = loop_of.iter().map(|l| l.is_some()).collect();
         let boundary_edges: Vec<(u32, u32, f64)> =
             weights.iter().copied().filter(|&(i, j, _)| on_boundary[i as usize] || on_boundary[j as usize]).collect();
+        // One AMD order of the mesh graph for both systems (AMD costs about as much as a numeric
+        // factorisation): each takes the order induced on its unknowns, a merged hole at the
+        // place of its last vertex.
+        let order = mesh_order(n, &domain.triangles)?;
         let h_chol = if n_h == 0 {
             // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the type
             // stays simple; it is never used with a non-empty right-hand side.
             SparseCholesky::new(1, &[(0, 0, 1.0)])?
         } else {
-            SparseCholesky::new(n_h, &cotan_laplacian_triplets(&weights, Some(&h_unknown)))?
+            let trip = cotan_laplacian_triplets(&weights, Some(&h_unknown));
+            SparseCholesky::with_order(n_h, &trip, &restrict_order(&order, &h_unknown, n_h))?
         };
 
         // (b) θ_h: Neumann Laplacian with vertex 0 fixed (θ_h = 0 there; the rotation is fixed
-        // afterwards). Which vertex is arbitrary, but pinning a boundary vertex made the
-        // fill-reducing ordering twice as slow to factorise on the beetle.
+        // afterwards).
         let fixed = 0;
         let mut theta_unknown = vec![None; n];
         let mut next = 0usize;
@@ -494,7 +510,8 @@ impl SlitMapSolver {
         let theta_chol = if next == 0 {
             SparseCholesky::new(1, &[(0, 0, 1.0)])?
         } else {
-            SparseCholesky::new(next, &cotan_laplacian_triplets(&weights, Some(&theta_unknown)))?
+            let trip = cotan_laplacian_triplets(&weights, Some(&theta_unknown));
+            SparseCholesky::with_order(next, &trip, &restrict_order(&order, &theta_unknown, next))?
         };
 
         let hole_pole = domain.loops[1..].iter().map(|lp| inscribed_centre(&domain.positions, lp)).collect();
