@@ -5,8 +5,8 @@
 use crate::fixtures;
 use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
 use crate::mesh::{self, MeshOptions, TriMesh};
-use crate::origin::{self, EnergyEvaluator, OriginOptions};
 use crate::num;
+use crate::origin::{self, EnergyEvaluator, OriginOptions};
 use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
 use crate::verify::{self, SweptVolume, VerifyOptions};
 use glam::DVec3;

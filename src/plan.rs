@@ -180,13 +180,15 @@ impl Planner {
 
         stage(1);
         let t = now();
-        let spacing_options = SpacingOptions { radius_mm: r, scallop_mm: options.scallop_mm, ..SpacingOptions::default() };
+        let spacing_options =
+            SpacingOptions { radius_mm: r, scallop_mm: options.scallop_mm, ..SpacingOptions::default() };
         let rings = spacing::spacing(&self.surface, &map, &spacing_options)?;
         timings.spacing = now() - t;
 
         stage(2);
         let t = now();
-        let spiral_options = SpiralOptions { direction: options.direction, cut: options.cut, ..SpiralOptions::default() };
+        let spiral_options =
+            SpiralOptions { direction: options.direction, cut: options.cut, ..SpiralOptions::default() };
         let spiral = spiral::spiral(&self.surface, &map, &rings, &spiral_options)?;
         timings.spiral = now() - t;
 
@@ -217,8 +219,12 @@ impl Planner {
         stage(4);
         let t = now();
         let header = header_lines(options, &origin, &rings, &summary);
-        let gcode_options =
-            GcodeOptions { post: options.post, part_name: options.part_name.clone(), header, ..GcodeOptions::default() };
+        let gcode_options = GcodeOptions {
+            post: options.post,
+            part_name: options.part_name.clone(),
+            header,
+            ..GcodeOptions::default()
+        };
         let gcode = gcode::gcode(&toolpath, &gcode_options)?;
         timings.post = now() - t;
 

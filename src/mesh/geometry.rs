@@ -79,7 +79,9 @@ pub fn build_surface(component: Component) -> Result<Surface, MeshError> {
 /// Angle-weighted vertex normals (Thürmer & Wüthrich): independent of how a region is split
 /// into triangles.
 pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], face_normals: &[DVec3]) -> Vec<DVec3> {
-    accumulate_corners(positions, triangles, |f, e1, e2| face_normals[f] * crate::num::atan2(e1.cross(e2).length(), e1.dot(e2)))
+    accumulate_corners(positions, triangles, |f, e1, e2| {
+        face_normals[f] * crate::num::atan2(e1.cross(e2).length(), e1.dot(e2))
+    })
 }
 
 /// Vertex normals with the weights of Max, "Weights for computing vertex normals from facet

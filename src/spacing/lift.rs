@@ -194,7 +194,9 @@ impl<'a> Lift<'a> {
     fn lifted(&self, w: DVec2, face: usize, vertices: [u32; 3], bary: [f64; 3]) -> Lifted {
         let s = self.surface;
         let at = |values: &[DVec3]| {
-            values[vertices[0] as usize] * bary[0] + values[vertices[1] as usize] * bary[1] + values[vertices[2] as usize] * bary[2]
+            values[vertices[0] as usize] * bary[0]
+                + values[vertices[1] as usize] * bary[1]
+                + values[vertices[2] as usize] * bary[2]
         };
         let p = at(&s.positions);
         let n = at(&s.vertex_normals).normalize_or_zero();

@@ -162,7 +162,10 @@ fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
         return bad(format!("scallop height {} mm must be a positive number", o.scallop_mm));
     }
     if o.scallop_mm >= o.radius_mm {
-        return bad(format!("scallop height {} mm must be smaller than the ball radius {} mm", o.scallop_mm, o.radius_mm));
+        return bad(format!(
+            "scallop height {} mm must be smaller than the ball radius {} mm",
+            o.scallop_mm, o.radius_mm
+        ));
     }
     if !(o.target_fraction > 0.0 && o.target_fraction <= 1.0) {
         return bad(format!("target fraction {} must be in (0, 1]", o.target_fraction));
@@ -213,7 +216,12 @@ impl<'a> Spacer<'a> {
         let slits = map
             .slits
             .iter()
-            .map(|s| SlitBand { radius: s.radius, theta_start: s.theta_start, extent: s.extent(), sag: 1e-9 * s.radius.max(1e-3) })
+            .map(|s| SlitBand {
+                radius: s.radius,
+                theta_start: s.theta_start,
+                extent: s.extent(),
+                sag: 1e-9 * s.radius.max(1e-3),
+            })
             .collect();
         let r_min = match map.mode {
             Mode::Disk => 0.0,
@@ -378,11 +386,8 @@ impl<'a> Spacer<'a> {
         thetas.sort_by(f64::total_cmp);
         thetas.dedup();
         self.meridians += thetas.len();
-        let upper = if first {
-            None
-        } else {
-            Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?)
-        };
+        let upper =
+            if first { None } else { Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?) };
         Ok((Band { hi, thetas, upper, last_fail: 0 }, length))
     }
 
@@ -540,4 +545,3 @@ pub(crate) fn segment_dist2(q: DVec3, a: DVec3, b: DVec3) -> f64 {
     let t = if l2 > 0.0 { ((q - a).dot(ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
     (a + ab * t - q).length_squared()
 }
-

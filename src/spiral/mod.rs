@@ -321,7 +321,12 @@ fn layout(
 }
 
 /// Lifts the pieces to the surface and samples them by chord error and segment length.
-fn sample(lift: &Lift<'_>, pieces: &[Piece], sense: f64, options: &SpiralOptions) -> Result<Vec<PathPoint>, SpiralError> {
+fn sample(
+    lift: &Lift<'_>,
+    pieces: &[Piece],
+    sense: f64,
+    options: &SpiralOptions,
+) -> Result<Vec<PathPoint>, SpiralError> {
     // Each point is searched first around the face of the point it refines (continuity
     // through P1 folds at slit tips, see `Lift::polar_near`).
     let eval = |piece: &Piece, u: f64, near: Option<u32>| -> Result<PathPoint, SpiralError> {

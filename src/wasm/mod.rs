@@ -138,7 +138,11 @@ impl JsPlanOptions {
                 "centroid" => OriginChoice::Centroid,
                 _ => match n.strip_prefix("hole:").and_then(|k| k.parse().ok()) {
                     Some(k) => OriginChoice::Hole(k),
-                    None => return Err(JsError::new(&format!("invalid origin `{n}`: use auto, centroid, hole:N, {{x, y}} or {{x, y, z}}"))),
+                    None => {
+                        return Err(JsError::new(&format!(
+                            "invalid origin `{n}`: use auto, centroid, hole:N, {{x, y}} or {{x, y, z}}"
+                        )))
+                    }
                 },
             },
             Some(JsOrigin::Point3 { x, y, z }) => OriginChoice::Point3d(glam::DVec3::new(x, y, z)),
