@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 echo "=== native ==="
-cargo bench --bench mesh --bench conformal 2>&1 | grep -v -E '^\s*(Compiling|Finished|Running)'
+cargo bench --bench mesh --bench conformal --bench origin --bench verify --bench plan 2>&1 | grep -v -E '^\s*(Compiling|Finished|Running)'
 echo "=== wasm (headless Chromium) ==="
 wasm-pack test --headless --chrome --release -- --test wasm_bench -- --nocapture 2>&1 |
   grep -v -E '^\s*(Compiling|Finished|Running|Blocking)|^\[INFO\]'

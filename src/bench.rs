@@ -400,3 +400,47 @@ mod tests {
         assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
     }
 }
+
+/// The whole pipeline on one part: faces, holes, rings, path length, max scallop / h and each
+/// stage's time (from the plan report), for `cargo bench --bench plan` and its wasm twin.
+pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
+    let t = now();
+    let out = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?;
+    let read = now() - t;
+    let holes = out.surface.loops.len().saturating_sub(1);
+    let planner = crate::plan::Planner::new(out, now).map_err(|e| e.to_string())?;
+    let options = crate::plan::PlanOptions::default();
+    let plan = planner.plan(&options, &mut |_, _, _| {}, now).map_err(|e| e.to_string())?;
+    let r = &plan.report;
+    let t = &r.timings_ms;
+    let ratio = r.verify.as_ref().map_or(f64::NAN, |v| v.max_scallop_mm / options.scallop_mm);
+    Ok(format!(
+        "{:<24} {:>7} {:>5} {:>5} {:>9.0} {:>6.2} | {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>7.0}",
+        name,
+        r.mesh.machined.as_ref().map_or(r.mesh.faces, |m| m.faces),
+        holes,
+        r.rings,
+        r.path.length_mm,
+        ratio,
+        read,
+        t.flatten,
+        t.slitmap,
+        t.origin,
+        t.spacing,
+        t.spiral,
+        t.toolpath,
+        t.verify,
+        t.post,
+        read + t.total,
+    ))
+}
+
+pub const PLAN_HEADER: &str = "case                       faces holes rings length mm max/h |  read  flat  slit origin spacng spiral  tool verify  post   total (ms)";
+
+/// The analytic parts of the pipeline benchmark.
+pub fn plan_cases() -> Vec<(String, TriMesh)> {
+    ["plate_3_holes", "saddle_2_holes", "spherical_cap_hole", "freeform_4_holes"]
+        .iter()
+        .map(|n| (n.to_string(), fixtures::by_name(n).expect("fixture")))
+        .collect()
+}

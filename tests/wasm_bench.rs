@@ -33,3 +33,16 @@ fn conformal_core_in_the_browser() {
         console_log!("{}", format_row(&best));
     }
 }
+
+#[wasm_bindgen_test]
+fn whole_pipeline_in_the_browser() {
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    console_log!("whole pipeline, wasm (headless Chromium)\n{}", slitpath::bench::PLAN_HEADER);
+    for (name, mesh) in slitpath::bench::plan_cases() {
+        match slitpath::bench::run_plan(&name, &mesh, &now) {
+            Ok(row) => console_log!("{row}"),
+            Err(e) => console_log!("{name} cannot be planned: {e}"),
+        }
+    }
+}

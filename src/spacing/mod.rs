@@ -220,7 +220,7 @@ impl<'a> Spacer<'a> {
                 radius: s.radius,
                 theta_start: s.theta_start,
                 extent: s.extent(),
-                sag: 1e-9 * s.radius.max(1e-3),
+                sag: 1e-6 * s.radius.max(1e-3),
             })
             .collect();
         let r_min = match map.mode {

@@ -2,7 +2,7 @@
 
 import type { PlanOptions } from "../core";
 
-export type FullPlanOptions = Required<PlanOptions>;
+export type FullPlanOptions = Required<Omit<PlanOptions, "partName">>;
 
 export const DEFAULT_PLAN_OPTIONS: Readonly<FullPlanOptions> = Object.freeze({
   radiusMm: 3,

@@ -1,0 +1,30 @@
+//! The whole pipeline per stage (native), R = 3 mm, h = 0.02 mm, on the analytic parts and the
+//! shared meshes with holes when present. The wasm twin is in tests/wasm_bench.rs. Prints
+//! figures; asserts nothing about time.
+
+use slitpath::bench::{plan_cases, run_plan, PLAN_HEADER};
+use slitpath::mesh::stl;
+use std::time::Instant;
+
+fn main() {
+    let start = Instant::now();
+    let now = || start.elapsed().as_secs_f64() * 1e3;
+    let mut cases = plan_cases();
+    let dir = [std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes"), "/work/shared/meshes".into()]
+        .into_iter()
+        .find(|d| d.is_dir())
+        .unwrap_or_default();
+    for name in ["wavy_mesh_with_hole.stl", "face_holes.stl", "plate_holes.stl", "beetle.stl"] {
+        match std::fs::read(dir.join(name)) {
+            Ok(bytes) => cases.push((name.to_string(), stl::read(&bytes, usize::MAX).expect("valid STL"))),
+            Err(_) => eprintln!("skipped: {name} is absent"),
+        }
+    }
+    println!("whole pipeline, native\n{PLAN_HEADER}");
+    for (name, mesh) in &cases {
+        match run_plan(name, mesh, &now) {
+            Ok(row) => println!("{row}"),
+            Err(e) => println!("{name:<24} cannot be planned: {e}"),
+        }
+    }
+}
