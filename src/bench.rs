@@ -357,50 +357,6 @@ pub fn format_verify(f: &VerifyFigures) -> String {
     )
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn a_case_runs_and_times_every_part() {
-        let clock = std::cell::Cell::new(0.0);
-        let now = || {
-            clock.set(clock.get() + 1.0);
-            clock.get()
-        };
-        let f = super::run_conformal("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
-        assert_eq!((f.holes, f.poles), (3, 4));
-        assert!(f.mesh_ms > 0.0 && f.slitmap_pole_ms > 0.0);
-    }
-
-    #[test]
-    fn the_origin_case_runs_and_times_every_part() {
-        let clock = std::cell::Cell::new(0.0);
-        let now = || {
-            clock.set(clock.get() + 1.0);
-            clock.get()
-        };
-        let f = super::run_origin("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
-        assert_eq!(f.holes, 3);
-        assert!(f.energy_ms > 0.0 && f.evaluate_ms > 0.0 && f.search_ms > 0.0);
-        assert!(f.evaluations > 0 && f.e_min <= f.centroid_e_min);
-    }
-
-    #[test]
-    fn the_verify_case_is_covered_and_timed() {
-        let clock = std::cell::Cell::new(0.0);
-        let now = || {
-            clock.set(clock.get() + 1.0);
-            clock.get()
-        };
-        let (surface, passes) = super::verify_case().unwrap();
-        let f = super::run_verify(&surface, &passes, 2000, &now).unwrap();
-        assert_eq!((f.faces, f.segments, f.samples), (40_344, 171 * 255, 2000));
-        // 0.6 mm apart with R = 3 on a gentle wave: about the flat R − √(R² − 0.3²) = 0.015 mm.
-        assert!(f.max_scallop_mm > 0.01 && f.max_scallop_mm < 0.02, "{}", f.max_scallop_mm);
-        assert_eq!(f.uncovered_samples, 0);
-        assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
-    }
-}
-
 /// The whole pipeline on one part: faces, holes, rings, path length, max scallop / h and each
 /// stage's time (from the plan report), for `cargo bench --bench plan` and its wasm twin.
 pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
@@ -443,4 +399,48 @@ pub fn plan_cases() -> Vec<(String, TriMesh)> {
         .iter()
         .map(|n| (n.to_string(), fixtures::by_name(n).expect("fixture")))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_case_runs_and_times_every_part() {
+        let clock = std::cell::Cell::new(0.0);
+        let now = || {
+            clock.set(clock.get() + 1.0);
+            clock.get()
+        };
+        let f = super::run_conformal("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
+        assert_eq!((f.holes, f.poles), (3, 4));
+        assert!(f.mesh_ms > 0.0 && f.slitmap_pole_ms > 0.0);
+    }
+
+    #[test]
+    fn the_origin_case_runs_and_times_every_part() {
+        let clock = std::cell::Cell::new(0.0);
+        let now = || {
+            clock.set(clock.get() + 1.0);
+            clock.get()
+        };
+        let f = super::run_origin("plate", &crate::fixtures::plate_3_holes(), &now).unwrap();
+        assert_eq!(f.holes, 3);
+        assert!(f.energy_ms > 0.0 && f.evaluate_ms > 0.0 && f.search_ms > 0.0);
+        assert!(f.evaluations > 0 && f.e_min <= f.centroid_e_min);
+    }
+
+    #[test]
+    fn the_verify_case_is_covered_and_timed() {
+        let clock = std::cell::Cell::new(0.0);
+        let now = || {
+            clock.set(clock.get() + 1.0);
+            clock.get()
+        };
+        let (surface, passes) = super::verify_case().unwrap();
+        let f = super::run_verify(&surface, &passes, 2000, &now).unwrap();
+        assert_eq!((f.faces, f.segments, f.samples), (40_344, 171 * 255, 2000));
+        // 0.6 mm apart with R = 3 on a gentle wave: about the flat R − √(R² − 0.3²) = 0.015 mm.
+        assert!(f.max_scallop_mm > 0.01 && f.max_scallop_mm < 0.02, "{}", f.max_scallop_mm);
+        assert_eq!(f.uncovered_samples, 0);
+        assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
+    }
 }

@@ -3,6 +3,8 @@
 //! every planned tool tip (and A C) within 1e-3, in order; CL data is read back with parse_cl.
 //! Also: determinism, no redundant words, the comment sanitiser, the A/C unwrapping and
 //! singularity on synthetic axis sequences, typed errors.
+// Native only: runs rs274 / reads files / uses serde_json (the browser tests are tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
 
 mod common;
 

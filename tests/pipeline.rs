@@ -1,6 +1,8 @@
 //! The whole pipeline on the holed fixtures: one continuous spiral on the surface that never
 //! crosses a hole, verified by the independent scallop simulation, G-code accepted by rs274,
 //! and byte-identical reruns.
+// Native only: runs rs274 / reads files / uses serde_json (the browser tests are tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
 
 mod common;
 

@@ -1,6 +1,8 @@
 //! Integration tests of the toolpath stage on synthetic contact spirals with exact normals
 //! (`fixtures::contact_spiral`): ball centres on the exact offset surface, tips, 5-axis lead and
 //! tilt, entry/exit geometry, safe height, stats, typed errors, determinism.
+// Native only: runs rs274 / reads files / uses serde_json (the browser tests are tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
 
 use glam::DVec3;
 use slitpath::fixtures::{contact_spiral, ContactPath, ContactSurface};

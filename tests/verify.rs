@@ -1,6 +1,8 @@
 //! The verifier against closed forms (flat plane under parallel passes, sphere cap under rings),
 //! gouges, uncovered regions and overlaps with known answers, an all-segments brute force,
 //! path metrics of a regular polygon, determinism and typed errors.
+// Native only: runs rs274 / reads files / uses serde_json (the browser tests are tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
 
 use glam::DVec3;
 use slitpath::fixtures;

@@ -41,7 +41,7 @@ use crate::mesh::Surface;
 use crate::slitmap::{Mode, SlitMap};
 use glam::DVec3;
 use serde::Serialize;
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 /// Options of the spacing stage.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -141,6 +141,9 @@ impl SlitBand {
     }
 }
 
+/// Meridians this close to a slit tip (radians of the slit domain) get the point-by-point test.
+const TIP_WINDOW: f64 = 0.05;
+
 /// Ball centres near one meridian angle on one ring: a short chain of capsule axes.
 type Chain = [DVec3; 5];
 
@@ -203,6 +206,8 @@ struct Band {
     /// Radius of ring k (1 for the outer boundary).
     hi: f64,
     thetas: Vec<f64>,
+    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip.
+    near_tip: Vec<bool>,
     /// Ring k's chain per meridian; `None` for the first ring (nothing cut above it).
     upper: Option<Vec<Chain>>,
     /// Index of the meridian that failed last: tested first next time.
@@ -388,7 +393,18 @@ impl<'a> Spacer<'a> {
         self.meridians += thetas.len();
         let upper =
             if first { None } else { Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?) };
-        Ok((Band { hi, thetas, upper, last_fail: 0 }, length))
+        // Near a slit tip the meridians bend around the end of the hole on the surface, so the
+        // distances along them need not be monotone: those are also tested point by point.
+        let near_tip = thetas
+            .iter()
+            .map(|&t| {
+                self.slits.iter().any(|s| {
+                    let d = |a: f64| ((t - a + PI).rem_euclid(TAU) - PI).abs();
+                    d(s.theta_start).min(d(s.theta_start + s.extent)) <= TIP_WINDOW
+                })
+            })
+            .collect();
+        Ok((Band { hi, thetas, near_tip, upper, last_fail: 0 }, length))
     }
 
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
@@ -472,8 +488,25 @@ impl<'a> Spacer<'a> {
                 let down = self.q((s.radius - s.sag).max(rho), theta)?;
                 Ok(dist_chain(up, &upper[i]) <= r && dist_chain(down, &lower) <= r)
             }
-            (Some(upper), None) => self.cusp_ok(&upper[i], &lower, rho, band.hi, theta),
+            (Some(upper), None) => {
+                if band.near_tip[i] && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)? {
+                    return Ok(false);
+                }
+                self.cusp_ok(&upper[i], &lower, rho, band.hi, theta)
+            }
         }
+    }
+
+    /// Every one of a few points of S^h along the meridian between the rings is cut by one of them.
+    fn band_points_ok(&self, upper: &Chain, lower: &Chain, lo: f64, hi: f64, theta: f64) -> Result<bool, SpacingError> {
+        const N: usize = 16;
+        for k in 1..N {
+            let q = self.q(lo + (hi - lo) * k as f64 / N as f64, theta)?;
+            if dist_chain(q, upper).min(dist_chain(q, lower)) > self.ball {
+                return Ok(false);
+            }
+        }
+        Ok(true)
     }
 
     /// The cusp between two rings on one meridian: where the distances to both centre chains are

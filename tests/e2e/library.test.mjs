@@ -59,7 +59,7 @@ describe("the npm package (worker-based API)", { concurrency: false }, () => {
         contacts: plan.pathContacts instanceof Float64Array ? plan.pathContacts.length : -1,
         scallop: plan.vertexScallop.length,
         vertices: part.positions.length / 3,
-        gcode: plan.gcode.slice(0, 200),
+        gcode: plan.gcode.slice(0, 2000),
         cancelled: await cancelled,
         same: again.gcode === plan.gcode,
         bad,
