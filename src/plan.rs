@@ -270,7 +270,8 @@ pub fn facet_tolerance_mm(surface: &Surface, radius_mm: f64) -> f64 {
             cos_min = cos_min.min(surface.face_normals[f].dot(surface.vertex_normals[v as usize]));
         }
     }
-    (radius_mm * (1.0 - cos_min.clamp(-1.0, 1.0))).max(1e-4)
+    // Never the ball radius itself (the verifier's bound): a mesh that coarse has no tolerance left.
+    (radius_mm * (1.0 - cos_min.clamp(-1.0, 1.0))).max(1e-4).min(0.1 * radius_mm)
 }
 
 fn check_options(o: &PlanOptions, surface: &Surface) -> Result<(), PlanError> {

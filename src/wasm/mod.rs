@@ -124,7 +124,38 @@ enum JsOrigin {
 }
 
 impl JsPlanOptions {
+    const FIELDS: [&'static str; 15] = [
+        "radiusMm",
+        "scallopMm",
+        "axes",
+        "leadDeg",
+        "tiltDeg",
+        "direction",
+        "cut",
+        "origin",
+        "post",
+        "feedMmMin",
+        "plungeFeedMmMin",
+        "spindleRpm",
+        "safeZMm",
+        "verifySamples",
+        "partName",
+    ];
+
     fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
+        // serde-wasm-bindgen only reads the known fields: a misspelt one would pass unnoticed.
+        if let Some(object) = options.dyn_ref::<js_sys::Object>() {
+            if let Some(key) = js_sys::Object::keys(object)
+                .iter()
+                .filter_map(|k| k.as_string())
+                .find(|k| !Self::FIELDS.contains(&k.as_str()))
+            {
+                return Err(JsError::new(&format!(
+                    "invalid plan options: unknown field `{key}`, expected one of {}",
+                    Self::FIELDS.join(", ")
+                )));
+            }
+        }
         let js: JsPlanOptions = if options.is_undefined() || options.is_null() {
             JsPlanOptions::default()
         } else {
