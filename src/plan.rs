@@ -133,10 +133,16 @@ pub struct Plan {
     pub rings: Rings,
     pub spiral: Spiral,
     pub toolpath: Toolpath,
-    pub verification: Option<Verification>,
     pub path: PathMetrics,
     pub gcode: String,
     pub report: PlanReport,
+}
+
+impl Plan {
+    /// The verifier's result (kept in the report; its per-vertex vectors are not serialised).
+    pub fn verification(&self) -> Option<&Verification> {
+        self.report.verify.as_ref()
+    }
 }
 
 /// The stages reported to a progress callback, in order.
@@ -203,8 +209,9 @@ impl Planner {
             safe_z_mm: options.safe_z_mm,
             ..ToolpathOptions::default()
         };
-        let toolpath = toolpath::toolpath(&spiral.contacts(), &spiral.normals(), &toolpath_options)?;
-        let path = verify::path_metrics(&spiral.contacts(), options.feed_mm_min);
+        let contacts = spiral.contacts();
+        let toolpath = toolpath::toolpath(&contacts, &spiral.normals(), &toolpath_options)?;
+        let path = verify::path_metrics(&contacts, options.feed_mm_min);
         timings.toolpath = now() - t;
 
         let summary = PathSummary {
@@ -254,8 +261,8 @@ impl Planner {
             + timings.verify;
         stage(6);
 
-        let report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification.as_ref(), timings);
-        Ok(Plan { origin, map, rings, spiral, toolpath, verification, path, gcode, report })
+        let report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
+        Ok(Plan { origin, map, rings, spiral, toolpath, path, gcode, report })
     }
 }
 
@@ -380,21 +387,6 @@ pub struct OriginReport {
     pub evaluations: usize,
 }
 
-#[derive(Debug, Clone, Serialize)]
-pub struct VerifyReport {
-    pub samples: usize,
-    pub max_scallop_mm: f64,
-    pub mean_scallop_mm: f64,
-    pub p95_scallop_mm: f64,
-    pub p99_scallop_mm: f64,
-    pub v_max_mm2: f64,
-    pub uncovered_fraction: f64,
-    pub gouges: usize,
-    pub max_gouge_mm: f64,
-    pub ct2: f64,
-    pub max_ct: u32,
-}
-
 /// The plan report (`slitpath plan --report`, and what the page shows).
 #[derive(Debug, Clone, Serialize)]
 pub struct PlanReport {
@@ -408,7 +400,7 @@ pub struct PlanReport {
     pub ring_radii: Vec<f64>,
     pub path: PathSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub verify: Option<VerifyReport>,
+    pub verify: Option<Verification>,
     pub gouge_risk_area_mm2: f64,
     pub flipped_triangles: usize,
     pub timings_ms: Timings,
@@ -423,7 +415,7 @@ impl PlanReport {
         map: &SlitMap,
         rings: &Rings,
         path: PathSummary,
-        verification: Option<&Verification>,
+        verification: Option<Verification>,
         timings_ms: Timings,
     ) -> Self {
         let (mode, annulus_hole, inner_radius) = match map.mode {
@@ -448,19 +440,7 @@ impl PlanReport {
             rings: rings.rings.len(),
             ring_radii: rings.radii(),
             path,
-            verify: verification.map(|v| VerifyReport {
-                samples: v.samples,
-                max_scallop_mm: v.max_scallop_mm,
-                mean_scallop_mm: v.mean_scallop_mm,
-                p95_scallop_mm: v.p95_scallop_mm,
-                p99_scallop_mm: v.p99_scallop_mm,
-                v_max_mm2: v.v_max_mm2,
-                uncovered_fraction: v.uncovered_fraction,
-                gouges: v.gouges,
-                max_gouge_mm: v.max_gouge_mm,
-                ct2: v.ct2,
-                max_ct: v.max_ct,
-            }),
+            verify: verification,
             gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,
             flipped_triangles: map.flipped_triangles(),
             timings_ms,

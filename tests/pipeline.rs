@@ -103,7 +103,7 @@ fn the_verifier_finds_the_scallop_under_control_and_no_gouge() {
         let p = planner(name);
         let options = PlanOptions { verify_samples: 40_000, ..PlanOptions::default() };
         let pl = plan(&p, &options);
-        let v = pl.verification.as_ref().expect("verified");
+        let v = pl.verification().expect("verified");
         let h = options.scallop_mm;
         println!(
             "{name}: rings {} length {:.0} mm, max {:.4} p99 {:.4} mean {:.4} mm (h {h}), uncovered {:.5}, gouges {} (max {:.5} mm), E_min {:.1} vs centroid {:.1}",

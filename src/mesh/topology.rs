@@ -222,30 +222,36 @@ fn face_neighbours(mesh: &TriMesh) -> Result<(Vec<u32>, usize), MeshError> {
     Ok((neighbour, edges))
 }
 
+/// Faces around each vertex in CSR form: the faces of vertex v are
+/// `faces[start[v]..start[v + 1]]`, in increasing order.
+pub fn vertex_faces(vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; vertices + 1];
+    for t in triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertices {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut faces = vec![0u32; start[vertices] as usize];
+    for (f, t) in triangles.iter().enumerate() {
+        for &v in t {
+            faces[fill[v as usize] as usize] = f as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    (start, faces)
+}
+
 /// Splits every vertex whose faces form several fans (a "pinch", e.g. two holes touching at a
 /// corner) into one vertex per fan, so boundary loops are simple and well defined.
 fn split_pinches(mesh: &TriMesh, neighbour: &[u32]) -> (Vec<[u32; 3]>, Vec<DVec3>, usize) {
     let nv = mesh.positions.len();
     let mut triangles = mesh.triangles.clone();
     let mut positions = mesh.positions.clone();
-    // Faces around each vertex (CSR).
-    let mut start = vec![0u32; nv + 1];
-    for t in &mesh.triangles {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..nv {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut incident = vec![0u32; start[nv] as usize];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            incident[fill[v as usize] as usize] = f as u32;
-            fill[v as usize] += 1;
-        }
-    }
+    let (start, incident) = vertex_faces(nv, &mesh.triangles);
     let mut split = 0;
     let mut fan: Vec<u32> = Vec::new();
     for v in 0..nv {

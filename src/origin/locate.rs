@@ -2,7 +2,7 @@
 //! face of the flattened domain containing a pole, and the 3D point of a pole.
 
 use crate::mesh::Surface;
-use crate::slitmap::PlanarDomain;
+use crate::slitmap::{barycentric, PlanarDomain};
 use glam::{DVec2, DVec3};
 
 /// Nearest point of the surface to `p`: (face, barycentric coordinates). Brute force, O(faces).
@@ -56,14 +56,6 @@ fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
     let denom = 1.0 / (va + vb + vc);
     let (v, w) = (vb * denom, vc * denom);
     [1.0 - v - w, v, w]
-}
-
-/// Barycentric coordinates of `q` in the planar triangle (a, b, c).
-fn barycentric(a: DVec2, b: DVec2, c: DVec2, q: DVec2) -> [f64; 3] {
-    let d = (b - a).perp_dot(c - a);
-    let l1 = (q - a).perp_dot(c - a) / d;
-    let l2 = (b - a).perp_dot(q - a) / d;
-    [1.0 - l1 - l2, l1, l2]
 }
 
 /// The face of the flattened domain containing `q` (largest minimum barycentric coordinate, so

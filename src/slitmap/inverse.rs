@@ -13,6 +13,18 @@ pub(crate) fn barycentric(a: DVec2, b: DVec2, c: DVec2, q: DVec2) -> [f64; 3] {
     [1.0 - l1 - l2, l1, l2]
 }
 
+/// Barycentric coordinates clamped to the triangle (negative ones set to 0, renormalised): the
+/// nearest-face answer for a point just outside it.
+pub(crate) fn clamp_barycentric(b: [f64; 3]) -> [f64; 3] {
+    let b = b.map(|x| x.max(0.0));
+    let s: f64 = b.iter().sum();
+    if s > 0.0 {
+        b.map(|x| x / s)
+    } else {
+        b
+    }
+}
+
 /// A located point: face, its vertices and barycentric coordinates (summing to 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Location {
@@ -155,12 +167,7 @@ impl InverseMap {
             }
         }
         best.map(|(_, mut loc)| {
-            let mut b = loc.bary.map(|x| x.max(0.0));
-            let s: f64 = b.iter().sum();
-            if s > 0.0 {
-                b = b.map(|x| x / s);
-            }
-            loc.bary = b;
+            loc.bary = clamp_barycentric(loc.bary);
             loc
         })
     }

@@ -71,6 +71,7 @@
 
 mod inverse;
 
+pub(crate) use inverse::{barycentric, clamp_barycentric};
 pub use inverse::{InverseMap, Location};
 
 use crate::linalg::{

@@ -8,9 +8,10 @@
 //! it; in the strip the two sides of a slit never overlap. Near the pole of a disk map, where the
 //! strip degenerates, location falls back to the w plane.
 
+use crate::mesh::topology::vertex_faces;
 use crate::mesh::Surface;
 use crate::num;
-use crate::slitmap::{Location, SlitMap};
+use crate::slitmap::{barycentric, clamp_barycentric, Location, SlitMap};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -47,24 +48,7 @@ pub struct Lift<'a> {
 impl<'a> Lift<'a> {
     pub fn new(surface: &'a Surface, map: &SlitMap) -> Self {
         let per_face = map.log_polar_corners();
-        let n = map.w.len();
-        let mut vertex_start = vec![0u32; n + 1];
-        for t in map.triangles().iter() {
-            for &v in t {
-                vertex_start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            vertex_start[v + 1] += vertex_start[v];
-        }
-        let mut fill = vertex_start.clone();
-        let mut vertex_faces = vec![0u32; vertex_start[n] as usize];
-        for (f, t) in map.triangles().iter().enumerate() {
-            for &v in t {
-                vertex_faces[fill[v as usize] as usize] = f as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        let (vertex_start, vertex_faces) = vertex_faces(map.w.len(), map.triangles());
         Self {
             surface,
             pole_faces: Vec::new(),
@@ -117,9 +101,7 @@ impl<'a> Lift<'a> {
                     return Some(lifted);
                 }
                 let (_, f, b) = best?;
-                let b = b.map(|x| x.max(0.0));
-                let s: f64 = b.iter().sum();
-                (f, b.map(|x| x / s))
+                (f, clamp_barycentric(b))
             }
         };
         let loc = Location { face, vertices: self.surface.triangles[face], bary };
@@ -186,9 +168,7 @@ impl<'a> Lift<'a> {
         if !clamp || m < -0.5 {
             return None;
         }
-        let b = b.map(|x| x.max(0.0));
-        let s: f64 = b.iter().sum();
-        Some(self.lifted(w, f, self.surface.triangles[f], b.map(|x| x / s)))
+        Some(self.lifted(w, f, self.surface.triangles[f], clamp_barycentric(b)))
     }
 
     fn lifted(&self, w: DVec2, face: usize, vertices: [u32; 3], bary: [f64; 3]) -> Lifted {
@@ -203,14 +183,6 @@ impl<'a> Lift<'a> {
         let n = if n == DVec3::ZERO { s.face_normals[face] } else { n };
         Lifted { w, p, n, face: face as u32 }
     }
-}
-
-/// Barycentric coordinates of `q` in triangle (a, b, c), either orientation.
-fn barycentric(a: DVec2, b: DVec2, c: DVec2, q: DVec2) -> [f64; 3] {
-    let d = (b - a).perp_dot(c - a);
-    let l1 = (q - a).perp_dot(c - a) / d;
-    let l2 = (b - a).perp_dot(q - a) / d;
-    [1.0 - l1 - l2, l1, l2]
 }
 
 /// Point location in the log-polar strip. The faces crowd towards some radii (a ring band can

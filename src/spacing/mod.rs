@@ -280,8 +280,8 @@ impl<'a> Spacer<'a> {
                     return Err(SpacingError::ToolLargerThanPart { radius_mm: self.ball });
                 }
                 if let Mode::Annulus { .. } = self.mode {
-                    let (_, len) = self.band(self.r_min, false)?;
-                    rings.push(Ring { radius: self.r_min, length_mm: len });
+                    let (length_mm, _) = self.ring_length(self.r_min)?;
+                    rings.push(Ring { radius: self.r_min, length_mm });
                 }
                 break;
             }
@@ -293,11 +293,6 @@ impl<'a> Spacer<'a> {
             rings.push(Ring { radius, length_mm: 0.0 });
             if rings.len() > self.options.max_rings {
                 return Err(SpacingError::TooManyRings { max: self.options.max_rings });
-            }
-        }
-        if let (Mode::Disk, Some(last)) = (self.mode, rings.last_mut()) {
-            if last.length_mm == 0.0 {
-                last.length_mm = self.ring_length(last.radius)?.0;
             }
         }
         Ok(Rings {

@@ -41,6 +41,19 @@ pub fn version() -> String {
     env!("CARGO_PKG_VERSION").to_string()
 }
 
+/// serde-wasm-bindgen reads only the known fields of an object, so a misspelt option would pass
+/// unnoticed: refuse any other key, naming it.
+fn reject_unknown_fields(options: &JsValue, fields: &[&str], what: &str) -> Result<(), JsError> {
+    let Some(object) = options.dyn_ref::<js_sys::Object>() else { return Ok(()) };
+    match js_sys::Object::keys(object).iter().filter_map(|k| k.as_string()).find(|k| !fields.contains(&k.as_str())) {
+        Some(key) => Err(JsError::new(&format!(
+            "invalid {what} options: unknown field `{key}`, expected one of {}",
+            fields.join(", ")
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Options of the mesh stage as the page passes them; every field is optional.
 #[derive(Debug, Default, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -59,19 +72,7 @@ impl JsMeshOptions {
         if options.is_undefined() || options.is_null() {
             return Ok(MeshOptions::default());
         }
-        // serde-wasm-bindgen only reads the known fields: a misspelt one would pass unnoticed.
-        if let Some(object) = options.dyn_ref::<js_sys::Object>() {
-            if let Some(key) = js_sys::Object::keys(object)
-                .iter()
-                .filter_map(|k| k.as_string())
-                .find(|k| !Self::FIELDS.contains(&k.as_str()))
-            {
-                return Err(JsError::new(&format!(
-                    "invalid mesh options: unknown field `{key}`, expected one of {}",
-                    Self::FIELDS.join(", ")
-                )));
-            }
-        }
+        reject_unknown_fields(&options, &Self::FIELDS, "mesh")?;
         let js: JsMeshOptions =
             serde_wasm_bindgen::from_value(options).map_err(|e| JsError::new(&format!("invalid mesh options: {e}")))?;
         let d = MeshOptions::default();
@@ -143,19 +144,7 @@ impl JsPlanOptions {
     ];
 
     fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
-        // serde-wasm-bindgen only reads the known fields: a misspelt one would pass unnoticed.
-        if let Some(object) = options.dyn_ref::<js_sys::Object>() {
-            if let Some(key) = js_sys::Object::keys(object)
-                .iter()
-                .filter_map(|k| k.as_string())
-                .find(|k| !Self::FIELDS.contains(&k.as_str()))
-            {
-                return Err(JsError::new(&format!(
-                    "invalid plan options: unknown field `{key}`, expected one of {}",
-                    Self::FIELDS.join(", ")
-                )));
-            }
-        }
+        reject_unknown_fields(&options, &Self::FIELDS, "plan")?;
         let js: JsPlanOptions = if options.is_undefined() || options.is_null() {
             JsPlanOptions::default()
         } else {
@@ -355,7 +344,7 @@ impl Planner {
     #[wasm_bindgen(js_name = vertexScallop)]
     pub fn vertex_scallop(&self) -> Result<Vec<f64>, JsError> {
         let plan = self.last()?;
-        Ok(match &plan.verification {
+        Ok(match plan.verification() {
             Some(v) => v
                 .vertex_scallop_mm
                 .iter()
