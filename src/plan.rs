@@ -12,6 +12,7 @@
 
 use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenQuality, Flattening};
 use crate::gcode::{self, GcodeError, GcodeOptions, Post};
+use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
 use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
 use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
@@ -153,6 +154,7 @@ impl Planner {
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;
+        let surface = refine_hole_rims(&surface, &RefineOptions::default());
         let t = now();
         let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
         let t_flatten = now() - t;

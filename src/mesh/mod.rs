@@ -24,6 +24,7 @@
 
 pub mod extract;
 pub mod geometry;
+pub mod refine;
 pub mod stl;
 pub mod topology;
 pub mod weld;

@@ -69,7 +69,9 @@
 //! interpolation ([`InverseMap`], seed 000 §2.1); [`SlitMap::log_polar_corners`] gives the
 //! log-polar coordinates (arg w, |w|) of seed 000 eq. 7 per triangle corner.
 
+mod delaunay;
 mod inverse;
+mod untangle;
 
 pub(crate) use inverse::{barycentric, clamp_barycentric};
 pub use inverse::{InverseMap, Location};
@@ -196,6 +198,9 @@ pub struct SlitMapOptions {
     /// smooth on the hole's boundary, i.e. p far from it; this also makes the result exactly
     /// independent of where in the hole the pole is. Default true.
     pub annulus_canonical_pole: bool,
+    /// Move the vertices of folded image triangles (slit tips, slivers) the least amount that
+    /// unfolds them, boundary vertices along their circles (see `untangle`). Default true.
+    pub untangle: bool,
 }
 
 impl Default for SlitMapOptions {
@@ -205,6 +210,7 @@ impl Default for SlitMapOptions {
             degenerate_area_rel: 1e-14,
             check_loop_orientation: true,
             annulus_canonical_pole: true,
+            untangle: true,
         }
     }
 }
@@ -372,6 +378,10 @@ fn wrap_pi(a: f64) -> f64 {
 pub struct SlitMapSolver {
     positions: Vec<DVec2>,
     triangles: Arc<Vec<[u32; 3]>>,
+    /// The Delaunay triangulation the Laplacians and the conjugate's right-hand side use.
+    fem_triangles: Vec<[u32; 3]>,
+    /// Faces around each vertex (CSR, [`crate::mesh::topology::vertex_faces`]), for untangling.
+    vertex_faces: (Vec<u32>, Vec<u32>),
     loops: Vec<Vec<u32>>,
     options: SlitMapOptions,
     /// Bounding-box diagonal of the domain (tolerance scale).
@@ -461,7 +471,10 @@ impl SlitMapSolver {
             }
         }
 
-        let weights = cotan_weights_2d(&domain.positions, &domain.triangles);
+        // The Laplacians are assembled on the Delaunay triangulation of the same vertices, where
+        // every cotan weight is non-negative; the map is still read on the domain's triangles.
+        let (fem_triangles, _) = delaunay::delaunay_flip(&domain.positions, &domain.triangles);
+        let weights = cotan_weights_2d(&domain.positions, &fem_triangles);
 
         // (a) h: interior vertices one unknown each, then one unknown per hole.
         let mut h_unknown = vec![None; n];
@@ -487,7 +500,7 @@ impl SlitMapSolver {
         // One AMD order of the mesh graph for both systems (AMD costs about as much as a numeric
         // factorisation): each takes the order induced on its unknowns, a merged hole at the
         // place of its last vertex.
-        let order = mesh_order(n, &domain.triangles)?;
+        let order = mesh_order(n, &fem_triangles)?;
         let h_chol = if n_h == 0 {
             // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the type
             // stays simple; it is never used with a non-empty right-hand side.
@@ -521,6 +534,8 @@ impl SlitMapSolver {
             hole_pole,
             positions: domain.positions.clone(),
             triangles: Arc::new(domain.triangles.clone()),
+            fem_triangles,
+            vertex_faces: crate::mesh::topology::vertex_faces(n, &domain.triangles),
             loops: domain.loops.clone(),
             options: options.clone(),
             scale,
@@ -608,7 +623,7 @@ impl SlitMapSolver {
         // (counter-clockwise), ∇φ_k = J e_k / (2A) and ∇h = J s / (2A), s = Σ_k h_k e_k, so
         // J∇h = −s / (2A) and b_i = −Σ_f (J e_i) · s / (4A) = −Σ_f e_i × s / (4A).
         let mut b = vec![0.0; n];
-        for t in self.triangles.iter() {
+        for t in self.fem_triangles.iter() {
             let z = [self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]];
             let e = [z[2] - z[1], z[0] - z[2], z[1] - z[0]];
             let area4 = 2.0 * e[1].perp_dot(e[2]).abs();
@@ -641,6 +656,17 @@ impl SlitMapSolver {
             if !wv.is_finite() {
                 return Err(SlitMapError::NonFiniteResult { vertex: v });
             }
+        }
+
+        if self.options.untangle {
+            let mut dof = vec![untangle::Dof::Free; n];
+            for (li, lp) in self.loops.iter().enumerate() {
+                let r = if li == 0 { 1.0 } else { num::exp(hole_log_radius[li - 1]) };
+                for &v in lp {
+                    dof[v as usize] = untangle::Dof::Circle(r);
+                }
+            }
+            untangle::untangle(&mut w, &self.triangles, &dof, &self.vertex_faces);
         }
 
         let mode = match region {

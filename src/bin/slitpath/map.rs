@@ -4,6 +4,7 @@
 use glam::DVec3;
 use serde::Serialize;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions, FlattenQuality};
+use slitpath::mesh::refine::{refine_hole_rims, RefineOptions};
 use slitpath::mesh::Surface;
 use slitpath::origin;
 use slitpath::slitmap::{self, Mode, PlanarDomain, SlitMapOptions};
@@ -72,6 +73,10 @@ pub struct MapResult {
 
 pub fn run(surface: &Surface, pole: &PoleChoice) -> Result<MapResult, String> {
     surface.check_plannable().map_err(|e| e.to_string())?;
+    // The planner's surface: hole rims refined so slit tips do not fold (the vertex list
+    // written below is this one; the part's own vertices come first, in their order).
+    let refined = refine_hole_rims(surface, &RefineOptions::default());
+    let surface = &refined;
     let t = Instant::now();
     let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(|e| e.to_string())?;
     let t_flatten = t.elapsed().as_secs_f64() * 1e3;

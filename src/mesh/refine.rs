@@ -1,0 +1,234 @@
+//! Rim refinement: more triangles around every hole vertex, so the slit map can open each hole
+//! into a slit without folding a triangle.
+//!
+//! Why (seed 000 §2.1, DESIGN.md "slitmap"): the slit map sends a hole's boundary onto a
+//! two-sided arc. Near the point that becomes the arc's tip the map behaves like `(z − z₀)²`: the
+//! interior angle of about π at that boundary vertex opens to 2π. A P1 map sends each triangle to
+//! a triangle, so a vertex whose fan has only two faces cannot open to 2π without folding one
+//! of them, and three faces barely can. Which vertex becomes a tip depends on the pole, so the
+//! refinement is pole-independent: every hole vertex gets at least
+//! [`RefineOptions::min_hole_valence`] faces, and the factorisations stay one per mesh.
+//!
+//! How: the edges opposite a hole vertex in its faces (its link) are split at their midpoints;
+//! each split adds one face to that vertex's fan. Faces with one, two or three split edges are
+//! cut into two, three or four (a conforming red–green split), so the mesh stays manifold.
+//!
+//! Invariants: the refined surface is the same piecewise-flat surface — every child face lies in
+//! its parent's plane, keeps its parent's normal and curvature tensor, and faces keep their
+//! winding. Original vertices keep their indices (new ones are appended), boundary loops gain
+//! the midpoints of split boundary edges in order. Deterministic: splits are numbered in edge
+//! order.
+
+use super::Surface;
+use glam::DVec3;
+use std::collections::BTreeMap;
+
+/// Options of the rim refinement. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RefineOptions {
+    /// Every hole vertex ends with at least this many faces, as far as `max_rounds` allows.
+    /// Default 6 (each face then opens by at most about 60° at a slit tip).
+    pub min_hole_valence: usize,
+    /// Rounds of link splitting; each round at most doubles a vertex's face count. Default 1:
+    /// further rounds pile thin triangles against the rims of coarse CAD parts and fold more
+    /// than they fix (featuretype, centroid pole: 0 folds after one round, 178 after two).
+    pub max_rounds: usize,
+}
+
+impl Default for RefineOptions {
+    fn default() -> Self {
+        Self { min_hole_valence: 6, max_rounds: 1 }
+    }
+}
+
+/// The surface with every hole vertex's fan refined (a clone when nothing needs splitting).
+/// `loops[1..]` are the holes; the outer loop maps onto a circle and needs nothing.
+pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
+    let mut s = surface.clone();
+    for _ in 0..options.max_rounds {
+        let edges = link_edges_to_split(&s, options.min_hole_valence);
+        if edges.is_empty() {
+            break;
+        }
+        s = split_edges(&s, &edges);
+    }
+    s
+}
+
+type Edge = (u32, u32);
+
+fn key(a: u32, b: u32) -> Edge {
+    (a.min(b), a.max(b))
+}
+
+/// The link edges of every hole vertex with fewer than `min_valence` faces, sorted.
+fn link_edges_to_split(s: &Surface, min_valence: usize) -> Vec<Edge> {
+    let n = s.positions.len();
+    let mut on_hole = vec![false; n];
+    for l in s.loops.iter().skip(1) {
+        for &v in l {
+            on_hole[v as usize] = true;
+        }
+    }
+    let mut valence = vec![0usize; n];
+    for t in &s.triangles {
+        for &v in t {
+            valence[v as usize] += 1;
+        }
+    }
+    let mut edges: Vec<Edge> = Vec::new();
+    for t in &s.triangles {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            if on_hole[v] && valence[v] < min_valence {
+                edges.push(key(t[(k + 1) % 3], t[(k + 2) % 3]));
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+/// Splits `edges` (sorted) at their midpoints with a conforming red–green subdivision.
+fn split_edges(s: &Surface, edges: &[Edge]) -> Surface {
+    let mut positions = s.positions.clone();
+    let mut vertex_normals = s.vertex_normals.clone();
+    let mut mid: BTreeMap<Edge, u32> = BTreeMap::new();
+    for &(a, b) in edges {
+        mid.insert((a, b), positions.len() as u32);
+        positions.push(0.5 * (s.positions[a as usize] + s.positions[b as usize]));
+        vertex_normals.push((s.vertex_normals[a as usize] + s.vertex_normals[b as usize]).normalize_or_zero());
+    }
+    let mut triangles = Vec::with_capacity(s.triangles.len() + 3 * edges.len());
+    let mut parent = Vec::with_capacity(triangles.capacity());
+    for (f, t) in s.triangles.iter().enumerate() {
+        let m = [0, 1, 2].map(|k| mid.get(&key(t[k], t[(k + 1) % 3])).copied());
+        for child in subdivide(*t, m, &positions) {
+            triangles.push(child);
+            parent.push(f);
+        }
+    }
+    let loops = s
+        .loops
+        .iter()
+        .map(|l| {
+            let mut out = Vec::with_capacity(l.len());
+            for (i, &a) in l.iter().enumerate() {
+                out.push(a);
+                if let Some(&m) = mid.get(&key(a, l[(i + 1) % l.len()])) {
+                    out.push(m);
+                }
+            }
+            out
+        })
+        .collect();
+    let face_areas = triangles
+        .iter()
+        .map(|t: &[u32; 3]| {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect();
+    Surface {
+        face_normals: parent.iter().map(|&f| s.face_normals[f]).collect(),
+        curvature: parent.iter().map(|&f| s.curvature[f]).collect(),
+        face_areas,
+        positions,
+        triangles,
+        loops,
+        vertex_normals,
+    }
+}
+
+/// The children of face `t` (corners `t[k]`, `m[k]` the midpoint of edge `t[k] → t[k+1]` when it
+/// is split), wound like `t`.
+fn subdivide(t: [u32; 3], m: [Option<u32>; 3], positions: &[DVec3]) -> Vec<[u32; 3]> {
+    match m.iter().filter(|x| x.is_some()).count() {
+        0 => vec![t],
+        1 => {
+            let k = m.iter().position(|x| x.is_some()).unwrap_or(0);
+            let (a, b, c, x) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3], m[k].unwrap_or(0));
+            vec![[a, x, c], [x, b, c]]
+        }
+        2 => {
+            // The unsplit edge is c → a; the split ones are a → b (x) and b → c (y).
+            let k = (m.iter().position(|x| x.is_none()).unwrap_or(0) + 1) % 3;
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let (x, y) = (m[k].unwrap_or(0), m[(k + 1) % 3].unwrap_or(0));
+            let p = |v: u32| positions[v as usize];
+            // The quad a x y c is cut along its shorter diagonal.
+            if p(a).distance_squared(p(y)) <= p(x).distance_squared(p(c)) {
+                vec![[x, b, y], [a, x, y], [a, y, c]]
+            } else {
+                vec![[x, b, y], [a, x, c], [x, y, c]]
+            }
+        }
+        _ => {
+            let [a, b, c] = t;
+            let [x, y, z] = m.map(|v| v.unwrap_or(0));
+            vec![[a, x, z], [x, b, y], [z, y, c], [x, y, z]]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures;
+    use crate::mesh::{self, MeshOptions};
+
+    fn load(name: &str) -> Surface {
+        let tri = fixtures::by_name(name).expect("a fixture");
+        mesh::from_triangles(&tri, &MeshOptions::default()).expect("a valid fixture").surface
+    }
+
+    fn valence(s: &Surface) -> Vec<usize> {
+        let mut v = vec![0; s.positions.len()];
+        for t in &s.triangles {
+            for &i in t {
+                v[i as usize] += 1;
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn every_hole_vertex_reaches_the_valence_and_the_surface_is_unchanged() {
+        let surface = load("plate_3_holes");
+        let r = refine_hole_rims(&surface, &RefineOptions { max_rounds: 3, ..RefineOptions::default() });
+        let val = valence(&r);
+        for l in r.loops.iter().skip(1) {
+            for &v in l {
+                assert!(val[v as usize] >= 6, "hole vertex {v} has {} faces", val[v as usize]);
+            }
+        }
+        let area = |s: &Surface| s.face_areas.iter().sum::<f64>();
+        assert!((area(&r) - area(&surface)).abs() < 1e-9 * area(&surface));
+        assert_eq!(r.euler_characteristic(), surface.euler_characteristic());
+        assert_eq!(r.loops.len(), surface.loops.len());
+        assert_eq!(&r.positions[..surface.positions.len()], &surface.positions[..]);
+        // Winding kept: every child's geometric normal agrees with its stored (parent's) normal.
+        for (t, n) in r.triangles.iter().zip(&r.face_normals) {
+            let [a, b, c] = t.map(|v| r.positions[v as usize]);
+            assert!((b - a).cross(c - a).normalize().dot(*n) > 1.0 - 1e-9);
+        }
+        // A manifold: every edge has one or two faces, boundary edges are exactly the loops'.
+        let mut count: BTreeMap<Edge, usize> = BTreeMap::new();
+        for t in &r.triangles {
+            for k in 0..3 {
+                *count.entry(key(t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        assert!(count.values().all(|&c| c <= 2));
+        let boundary = count.values().filter(|&&c| c == 1).count();
+        assert_eq!(boundary, r.loops.iter().map(Vec::len).sum::<usize>());
+    }
+
+    #[test]
+    fn a_surface_without_holes_is_left_alone() {
+        let surface = load("unit_disk");
+        let r = refine_hole_rims(&surface, &RefineOptions::default());
+        assert_eq!(r.triangles, surface.triangles);
+    }
+}
