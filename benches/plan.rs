@@ -1,5 +1,6 @@
-//! The whole pipeline per stage (native), R = 3 mm, h = 0.02 mm, on the analytic parts and the
-//! shared meshes with holes when present. The wasm twin is in tests/wasm_bench.rs. Prints
+//! The whole pipeline per stage (native), R = 3 mm, h = 0.02 mm, on the analytic parts (and the
+//! 40k-face six-hole panel) and on the shared meshes with holes when present (scaled options, see
+//! `slitpath::bench::run_plan`). The wasm twin is in tests/wasm_bench.rs. Prints
 //! figures; asserts nothing about time.
 
 use slitpath::bench::{plan_cases, run_plan, PLAN_HEADER};
@@ -14,7 +15,18 @@ fn main() {
         .into_iter()
         .find(|d| d.is_dir())
         .unwrap_or_default();
-    for name in ["wavy_mesh_with_hole.stl", "face_holes.stl", "plate_holes.stl", "beetle.stl"] {
+    for name in [
+        "wavy_mesh_with_hole.stl",
+        "face_holes.stl",
+        "halftunnel.stl",
+        "inverted_triangles.stl",
+        "mech-holes-shark.stl",
+        "intersection_quads.stl",
+        "plate_holes.stl",
+        "featuretype.stl",
+        "ktoolcav.stl",
+        "beetle.stl",
+    ] {
         match std::fs::read(dir.join(name)) {
             Ok(bytes) => cases.push((name.to_string(), stl::read(&bytes, usize::MAX).expect("valid STL"))),
             Err(_) => eprintln!("skipped: {name} is absent"),

@@ -206,6 +206,24 @@ pub fn freeform_4_holes() -> TriMesh {
     lift(&p, t, freeform_height)
 }
 
+/// The benchmark panel of issue 5: the sample part's surface and holes plus two circles (radii
+/// 6 and 5 mm at (−35, 22) and (42, −25)), six holes in all, meshed with edge length `edge_mm`
+/// (0.75 mm gives about 40 000 faces; the face count scales with 1/edge²).
+/// Topology: 7 boundary loops, Euler characteristic −5.
+pub fn panel_6_holes(edge_mm: f64) -> TriMesh {
+    let [a, b, c, d] = freeform_holes();
+    let holes = [
+        a,
+        b,
+        c,
+        d,
+        Curve::Circle { c: DVec2::new(-35.0, 22.0), r: 6.0 },
+        Curve::Circle { c: DVec2::new(42.0, -25.0), r: 5.0 },
+    ];
+    let (p, t) = planar_domain_with_holes(&rect(-60.0, -45.0, 60.0, 45.0), &holes, edge_mm, 0x6E01);
+    lift(&p, t, freeform_height)
+}
+
 const SYMMETRIC_HOLES: [(f64, f64, f64); 4] =
     [(20.0, 20.0, 6.0), (-20.0, 20.0, 6.0), (-20.0, -20.0, 6.0), (20.0, -20.0, 6.0)];
 

@@ -150,7 +150,8 @@ impl Plan {
 pub const STAGES: [&str; 7] = ["origin", "spacing", "spiral", "toolpath", "post", "verify", "done"];
 
 impl Planner {
-    /// Flattens the surface and factorises the slit map once.
+    /// Refines the hole rims ([`crate::mesh::refine`]; `surface` is then the refined surface, the
+    /// part's vertices first), flattens it and factorises the slit map once.
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;

@@ -81,7 +81,7 @@ fn needs_flip(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
         e1.dot(e2) / e1.perp_dot(e2).abs()
     };
     let s = cot(c, a, b) + cot(d, a, b);
-    if !(s < -1e-9) {
+    if s >= -1e-9 || s.is_nan() {
         return false;
     }
     // Convex: c and d on opposite sides of a–b (given), and a and b on opposite sides of c–d.

@@ -48,17 +48,22 @@
 //! # Invariants of the output
 //! |w| = 1 on Γ0 vertices, |w| constant on each hole's vertices (to rounding), |w| ≤ 1 elsewhere
 //! (discrete maximum principle up to discretisation error), slits at distinct radii or disjoint
-//! angular extents. No flipped image triangle on the disk and annulus oracles; on general domains
-//! a P1 map can flip a few sliver triangles ([`SlitMap::flipped_faces`]) in two known places:
+//! angular extents.
+//!
+//! **Folds.** A P1 map can fold image triangles in three known places:
 //! * at a slit tip: F has a critical point on the hole boundary there (the boundary folds back
-//!   along the arc), so the hole vertex of extreme angle must be surrounded by image triangles
-//!   sweeping nearly 2π; with the 2–3 triangles such vertices have on the shared meshes no P1
-//!   map on this triangulation can do that without a fold (a fix needs a pole-dependent local
-//!   refinement at the tip, not a different solve);
-//! * "ears" of the outer loop (a triangle with three outer-loop vertices): their images are
-//!   inscribed in the unit circle and flip when the discrete conjugate reorders the angles;
-//! * under crowding: for a pole very close to the boundary, the far part of the domain maps to a
-//!   sliver near |w| = 1 whose triangles are smaller than the P1 error.
+//!   along the arc), so image triangles within an edge of the tip are as small as the P1 error;
+//! * sliver triangles, and "ears" of the outer loop (three outer-loop vertices);
+//! * under crowding: for a pole near one end of a long part, the far end maps to a band near
+//!   |w| = 1 thinner than the P1 error.
+//!
+//! Three measures remove the first two: the planner refines hole rims so every hole vertex has
+//! enough faces to open by 2π (`mesh::refine`, pole-independent); both Laplacians are assembled
+//! on the Delaunay triangulation of the same vertices (`delaunay`: non-negative cotan weights,
+//! so the discrete maximum principle holds for h); and `untangle` moves the vertices of the few
+//! remaining folded triangles by the least amount that unfolds them, boundary vertices along
+//! their circles, so every boundary invariant above is kept exactly. Crowding (hundreds of
+//! folds) is left as it is and counted by [`SlitMap::flipped_faces`].
 //!
 //! # Determinism
 //! Both factorisations and every solve run in [`crate::linalg`]'s scalar code and all

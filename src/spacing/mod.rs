@@ -192,6 +192,8 @@ struct Spacer<'a> {
     ball: f64,
     h: f64,
     meridian_mm: f64,
+    /// arg w of the corners of the outer loop (and of the annulus' inner loop).
+    corners: Vec<f64>,
     /// Radial intervals no ring may run in: the radius ranges of flipped image triangles (P1
     /// folds at slit tips), where the inverse map is not one-to-one and a ring would jump.
     forbidden: Vec<(f64, f64)>,
@@ -199,6 +201,32 @@ struct Spacer<'a> {
     trials: usize,
     meridians: usize,
     fold_compromises: usize,
+}
+
+/// A boundary vertex whose edges turn by more than this (in 3D) is a corner.
+const CORNER_TURN: f64 = 25.0 * PI / 180.0;
+
+/// arg w of the corners of the loops that map onto circles: the outer one, and in annulus mode
+/// the inner one.
+fn corner_angles(surface: &Surface, map: &SlitMap) -> Vec<f64> {
+    let mut loops = vec![0];
+    if let Mode::Annulus { hole, .. } = map.mode {
+        loops.push(hole);
+    }
+    let mut out = Vec::new();
+    for li in loops {
+        let l = &surface.loops[li];
+        for i in 0..l.len() {
+            let p = |k: usize| surface.positions[l[k % l.len()] as usize];
+            let (a, b) = (p(i + 1) - p(i), p(i + 2) - p(i + 1));
+            let turn = crate::num::atan2(a.cross(b).length(), a.dot(b));
+            if turn > CORNER_TURN {
+                let w = map.w[l[(i + 1) % l.len()] as usize];
+                out.push(crate::num::atan2(w.y, w.x).rem_euclid(TAU));
+            }
+        }
+    }
+    out
 }
 
 /// The band above a candidate ring: the meridians tested and ring k's centres near each.
@@ -252,6 +280,7 @@ impl<'a> Spacer<'a> {
         }
         Self {
             lift: Lift::new(surface, map),
+            corners: corner_angles(surface, map),
             forbidden: merged,
             slits,
             mode: map.mode,
@@ -383,6 +412,15 @@ impl<'a> Spacer<'a> {
                 }
             }
         }
+        // A corner of the outer loop maps to a point of the circle with a tiny angular neighbourhood
+        // (the map opens its interior angle to π): its meridians are tested densely too, else the
+        // corner itself falls between two meridians.
+        for &c in &self.corners {
+            for d in [0.0, 5e-4, 1e-3, 2e-3, 4e-3, 8e-3] {
+                thetas.push((c + d).rem_euclid(TAU));
+                thetas.push((c - d).rem_euclid(TAU));
+            }
+        }
         thetas.sort_by(f64::total_cmp);
         thetas.dedup();
         self.meridians += thetas.len();
@@ -476,7 +514,9 @@ impl<'a> Spacer<'a> {
         match (&band.upper, crossing) {
             // First ring: the band up to the boundary is cut by this ring alone.
             (None, Some(_)) => Ok(false),
-            (None, None) => Ok(dist_chain(self.q(band.hi, theta)?, &lower) <= r),
+            // The boundary point is taken a hair inside: exactly on |w| = 1 the inverse map may
+            // pick the neighbouring boundary face of a corner (wavy_mesh_with_hole jumped 0.1 mm).
+            (None, None) => Ok(dist_chain(self.q(band.hi * (1.0 - 1e-9), theta)?, &lower) <= r),
             // A hole in between: ring k cuts down to its upper rim, this ring up to its lower one.
             (Some(upper), Some(s)) => {
                 let up = self.q(s.radius + s.sag, theta)?;
