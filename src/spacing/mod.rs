@@ -15,7 +15,8 @@
 //! point of the band is where the two are equal; it is found by root finding (regula falsi) on
 //! the meridian instead of being hoped for among samples, which is what lets the verifier's
 //! fresh samples agree with the promise. Meridians are spaced `meridian_spacing_mm` apart along
-//! the ring (plus extra ones at every slit tip); a meridian that crosses a hole's slit splits:
+//! the ring (plus dense ones at every slit tip and at every corner of the outer loop, which the map
+//! squeezes into a tiny arc); a meridian that crosses a hole's slit splits:
 //! the part above the hole must be cut by ring k, the part below by ring k+1.
 //!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in

@@ -236,7 +236,10 @@ impl Planner {
         to_js(&self.mesh().0)
     }
 
-    /// Vertex positions of the surface to machine, flat `[x0, y0, z0, x1, …]`, for WebGL.
+    /// Vertex positions of the surface to machine, flat `[x0, y0, z0, x1, …]`, for WebGL. Once
+    /// the planner is built (by `flattened`, `slitMap` or `plan`) this is its surface, whose hole
+    /// rims are refined: the part's vertices first, then the added ones, matching every
+    /// per-vertex array of the plan.
     pub fn positions(&self) -> Vec<f32> {
         let p = &self.mesh().1.positions;
         p.iter().flat_map(|v| v.as_vec3().to_array()).collect()

@@ -34,7 +34,6 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   current = part;
   // The G-code header names the part like the CLI does: the file name without its extension.
   currentName = request.name.replace(/\.[^./\\]*$/, "") || "part";
-  const { positions, triangles } = part.surface();
   let uv: Float64Array | null = null;
   let previewW: Float64Array | null = null;
   let conformalError: string | null = null;
@@ -46,6 +45,8 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     if (isFatal(error)) throw error;
     conformalError = errorMessage(error);
   }
+  // After flattening: the planner's surface has its hole rims refined (more vertices).
+  const { positions, triangles } = part.surface();
   currentUv = uv;
   currentTriangles = triangles.slice();
   const loaded: LoadedPart = {
