@@ -14,6 +14,7 @@ use glam::DVec3;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// One motion of rs274's canonical output.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +40,7 @@ pub struct Interpreted {
 }
 
 static RUN: AtomicUsize = AtomicUsize::new(0);
+static RS274: Mutex<()> = Mutex::new(());
 
 /// Runs `program` through rs274 with tool `tool_number` in the tool table and asserts that it
 /// is accepted: exit status 0 and nothing on stderr but rs274's `executing`. Fails (panics) with
@@ -53,18 +55,29 @@ pub fn rs274(program: &str, tool_number: u32) -> Interpreted {
     std::fs::write(dir.join("program.ngc"), program).expect("write program.ngc");
     std::fs::write(dir.join("tool.tbl"), format!("T{tool_number} P{tool_number} Z0 D0.25 ;ball-end\n"))
         .expect("write tool.tbl");
-    let output = match Command::new("rs274")
-        .args(["-t", "tool.tbl", "-g", "program.ngc", "canon.txt"])
-        .current_dir(&dir)
-        .stdin(Stdio::null())
-        .output()
-    {
-        Ok(o) => o,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => panic!(
-            "rs274 (LinuxCNC's standalone G-code interpreter, Debian package linuxcnc-uspace) is not \
-             installed: run scripts/setup.sh (the CI installs it)"
-        ),
-        Err(e) => panic!("cannot run rs274: {e}"),
+    // One rs274 at a time, and a run killed by a signal is run again (twice now, from the gcode
+    // tests' parallel threads, rs274 died of one with no output at all); a rejection never is.
+    let _one = RS274.lock().unwrap_or_else(|e| e.into_inner());
+    let mut attempts = 0;
+    let output = loop {
+        attempts += 1;
+        let output = match Command::new("rs274")
+            .args(["-t", "tool.tbl", "-g", "program.ngc", "canon.txt"])
+            .current_dir(&dir)
+            .stdin(Stdio::null())
+            .output()
+        {
+            Ok(o) => o,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => panic!(
+                "rs274 (LinuxCNC's standalone G-code interpreter, Debian package linuxcnc-uspace) is not \
+                 installed: run scripts/setup.sh (the CI installs it)"
+            ),
+            Err(e) => panic!("cannot run rs274: {e}"),
+        };
+        if output.status.code().is_some() || attempts == 3 {
+            break output;
+        }
+        eprintln!("rs274 was killed by a signal ({:?}); running it again", output.status);
     };
     let stderr = String::from_utf8_lossy(&output.stderr).to_string();
     let errors: Vec<&str> = stderr.lines().map(str::trim).filter(|l| !l.is_empty() && *l != "executing").collect();
