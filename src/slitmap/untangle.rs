@@ -28,14 +28,18 @@ pub(crate) enum Dof {
 }
 
 const SWEEPS: usize = 24;
-/// More folded faces than this (or an eighth of the faces) are not a local artefact.
-pub(crate) const MAX_LOCAL_FOLDS: usize = 64;
+/// More folded faces than this (or an eighth of the faces, up to [`MAX_FOLDS`]) are not a local
+/// artefact.
+const MAX_LOCAL_FOLDS: usize = 64;
+/// Crowding folds thousands of faces; untangling them costs a pole 170 ms and fixes nothing.
+const MAX_FOLDS: usize = 512;
 /// Stars with more link edges are left alone (the Chebyshev centre enumerates triples).
 const MAX_LINES: usize = 40;
 
-/// Untangles `w` in place; returns the number of faces still folded. Folds on more than
-/// [`MAX_LOCAL_FOLDS`] faces (or an eighth of them) are not local (crowding: a pole a fraction of an edge from the
-/// boundary squeezes the far side of the part below the P1 resolution) and are left as they are.
+/// Untangles `w` in place; returns the number of faces still folded. Folds on more faces than
+/// [`MAX_LOCAL_FOLDS`] (or an eighth of them, at most [`MAX_FOLDS`]) are not local (crowding: a
+/// pole near one end of a long part squeezes the far end below the P1 resolution) and are left
+/// as they are.
 pub(crate) fn untangle(
     w: &mut [DVec2],
     triangles: &[[u32; 3]],
@@ -46,7 +50,7 @@ pub(crate) fn untangle(
         (0..triangles.len()).filter(|&f| signed_area(w, &triangles[f]) <= 0.0).collect()
     };
     let mut bad = folded(w);
-    if bad.len() > MAX_LOCAL_FOLDS.max(triangles.len() / 8) {
+    if bad.len() > MAX_LOCAL_FOLDS.max(triangles.len() / 8).min(MAX_FOLDS) {
         return bad.len();
     }
     // Moving a vertex can fold a triangle of its star that was fine; the best state is kept.
