@@ -18,6 +18,7 @@
 //! fixtures are height fields over such domains, so their projection keeps the planar mesh quality.
 
 use crate::mesh::TriMesh;
+use crate::num;
 use glam::{DVec2, DVec3};
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
@@ -76,7 +77,7 @@ pub fn unit_disk(rings: usize) -> TriMesh {
         let n = 6 * k;
         // k / rings is exactly 1.0 on the last ring, so the boundary is on the unit circle.
         let r = k as f64 / rings as f64;
-        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * t.cos(), r * t.sin(), 0.0));
+        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * num::cos(t), r * num::sin(t), 0.0));
         zip_rings(&prev, &prev_frac, &ring, &frac, &mut triangles);
         prev = ring;
         prev_frac = frac;
@@ -104,7 +105,7 @@ pub fn concentric_annulus(inner_radius: f64, rings: usize) -> TriMesh {
     for k in 0..=rings {
         let r = if k == rings { 1.0 } else { inner_radius + k as f64 * dr };
         let n = ((TAU * r / dr).round() as usize).max(6);
-        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * t.cos(), r * t.sin(), 0.0));
+        let (ring, frac) = push_ring(&mut positions, n, 0.0, |t| DVec3::new(r * num::cos(t), r * num::sin(t), 0.0));
         if let Some((p, pf)) = &prev {
             zip_rings(p, pf, &ring, &frac, &mut triangles);
         }
@@ -188,10 +189,10 @@ fn freeform_holes() -> [Curve; 4] {
 
 /// Height of the freeform panel: two Gaussian bumps, a dip and a gentle wave.
 fn freeform_height(q: DVec2) -> f64 {
-    let g = |c: DVec2, s: f64| (-(q - c).length_squared() / (2.0 * s * s)).exp();
+    let g = |c: DVec2, s: f64| num::exp(-(q - c).length_squared() / (2.0 * s * s));
     9.5 * g(DVec2::new(-25.0, 8.0), 18.0) - 7.0 * g(DVec2::new(28.0, -12.0), 14.0)
         + 4.0 * g(DVec2::new(30.0, 28.0), 10.0)
-        + 1.5 * (TAU * q.x / 70.0).sin() * (TAU * q.y / 90.0).cos()
+        + 1.5 * num::sin(TAU * q.x / 70.0) * num::cos(TAU * q.y / 90.0)
 }
 
 /// The bundled sample part: a bumpy freeform mould panel, 120 × 90 mm (x ∈ [−60, 60],
@@ -238,7 +239,7 @@ const SYMMETRIC_HOLES: [(f64, f64, f64); 4] =
 pub fn symmetric_4_holes() -> TriMesh {
     let (p, t) = planar_domain_with_holes(&rect(-40.0, -40.0, 40.0, 40.0), &circles(&SYMMETRIC_HOLES), 1.5, 0x5E7);
     let k = std::f64::consts::PI / 80.0;
-    lift(&p, t, |q| 8.0 * (k * q.x).cos() * (k * q.y).cos())
+    lift(&p, t, |q| 8.0 * num::cos(k * q.x) * num::cos(k * q.y))
 }
 
 /// A deliberately low-quality mesh: a gently curved 100 × 60 mm sheet (x ∈ [−50, 50],
@@ -473,7 +474,7 @@ pub fn cylinder(radius: f64, height: f64, segments: usize, stacks: usize) -> Tri
     for k in 0..=stacks {
         let z = height * k as f64 / stacks as f64;
         let (ring, frac) = push_ring(&mut positions, segments, 0.5 * (k % 2) as f64, |t| {
-            DVec3::new(radius * t.cos(), radius * t.sin(), z)
+            DVec3::new(radius * num::cos(t), radius * num::sin(t), z)
         });
         if let Some((p, pf)) = &prev {
             // The upper ring plays the "inner" ring of the planar zipper: that makes normals
@@ -686,7 +687,7 @@ impl Curve {
         match *self {
             Curve::Circle { c, r } => (p - c).length_squared() < r * r,
             Curve::Ellipse { c, a, b, rot } => {
-                let q = DVec2::from_angle(-rot).rotate(p - c);
+                let q = DVec2::new(num::cos(rot), -num::sin(rot)).rotate(p - c);
                 (q.x / a).powi(2) + (q.y / b).powi(2) < 1.0
             }
             Curve::Rect { min, max } => p.cmpgt(min).all() && p.cmplt(max).all(),
@@ -699,7 +700,7 @@ impl Curve {
         match *self {
             Curve::Circle { c, .. } => vec![c],
             Curve::Ellipse { c, a, rot, .. } => {
-                let u = DVec2::from_angle(rot) * (0.5 * a);
+                let u = DVec2::new(num::cos(rot), num::sin(rot)) * (0.5 * a);
                 vec![c - u, c + 0.1 * u.perp(), c + u]
             }
             Curve::Rect { .. } => vec![],
@@ -715,14 +716,14 @@ impl Curve {
                 (0..n)
                     .map(|k| {
                         let t = TAU * (k as f64 + phase) / n as f64;
-                        c + r * DVec2::new(t.cos(), t.sin())
+                        c + r * DVec2::new(num::cos(t), num::sin(t))
                     })
                     .collect()
             }
             Curve::Ellipse { c, a, b, rot } => {
                 // Equal arc length spacing through a fine cumulative-length table.
                 let m = 4096;
-                let at = |t: f64| c + DVec2::from_angle(rot).rotate(DVec2::new(a * t.cos(), b * t.sin()));
+                let at = |t: f64| c + DVec2::new(num::cos(rot), num::sin(rot)).rotate(DVec2::new(a * num::cos(t), b * num::sin(t)));
                 let mut cum = vec![0.0; m + 1];
                 for k in 1..=m {
                     let (t0, t1) = (TAU * (k - 1) as f64 / m as f64, TAU * k as f64 / m as f64);
