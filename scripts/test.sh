@@ -84,6 +84,8 @@ step "clippy (wasm32 library)" cargo clippy --lib --target wasm32-unknown-unknow
 step "cargo test (native, release)" cargo test --release
 # Only the browser tests (tests/wasm.rs): the native test files are not meant for wasm32.
 # The browser's capabilities (headless, no sandbox as root, Debian's binary) are in webdriver.json.
+# The runner's default 20 s budget is also its per-request timeout while the page computes.
+export WASM_BINDGEN_TEST_TIMEOUT=300
 step "wasm facade in headless Chromium" wasm-pack test --headless --chrome --release -- --test wasm
 
 step "wasm package for the page" wasm-pack build --target web --out-dir www/pkg --release

@@ -723,7 +723,9 @@ impl Curve {
             Curve::Ellipse { c, a, b, rot } => {
                 // Equal arc length spacing through a fine cumulative-length table.
                 let m = 4096;
-                let at = |t: f64| c + DVec2::new(num::cos(rot), num::sin(rot)).rotate(DVec2::new(a * num::cos(t), b * num::sin(t)));
+                let at = |t: f64| {
+                    c + DVec2::new(num::cos(rot), num::sin(rot)).rotate(DVec2::new(a * num::cos(t), b * num::sin(t)))
+                };
                 let mut cum = vec![0.0; m + 1];
                 for k in 1..=m {
                     let (t0, t1) = (TAU * (k - 1) as f64 / m as f64, TAU * k as f64 / m as f64);

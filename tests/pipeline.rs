@@ -120,8 +120,9 @@ fn the_verifier_finds_the_scallop_under_control_and_no_gouge() {
         );
         assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
         assert!(v.p99_scallop_mm <= h, "{name}: p99 scallop {} over h", v.p99_scallop_mm);
-        // Issue 4 asks 1.02·h; with the folds at slit tips gone (issue 3) the worst sample is
-        // 1.0 h on the plate and 1.2 h on the freeform panel (it was 3.8 h).
+        // Issue 4 asks 1.02·h; with the folds at slit tips gone (issue 3) and the outer corners'
+        // meridians tested, the worst sample is 1.0 h on the plate and 1.0–1.15 h on the
+        // freeform panel, depending on the samples (it was 3.8 h).
         assert!(v.max_scallop_mm <= 1.4 * h, "{name}: max scallop {}", v.max_scallop_mm);
         assert!(v.max_gouge_mm <= 5e-3, "{name}: gouge {} mm", v.max_gouge_mm);
         assert!(pl.origin.energy.e_min <= pl.origin.centroid_energy.e_min + 1e-9);
