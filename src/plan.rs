@@ -149,13 +149,20 @@ impl Plan {
 /// The stages reported to a progress callback, in order.
 pub const STAGES: [&str; 7] = ["origin", "spacing", "spiral", "toolpath", "post", "verify", "done"];
 
+/// The surface every conformal stage works on: `surface` with its hole rims refined
+/// ([`crate::mesh::refine`]; the part's vertices first, in their order). The `map` CLI uses it
+/// too, so its vertex list is the planner's.
+pub fn planning_surface(surface: &Surface) -> Surface {
+    refine_hole_rims(surface, &RefineOptions::default())
+}
+
 impl Planner {
     /// Refines the hole rims ([`crate::mesh::refine`]; `surface` is then the refined surface, the
     /// part's vertices first), flattens it and factorises the slit map once.
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;
-        let surface = refine_hole_rims(&surface, &RefineOptions::default());
+        let surface = planning_surface(&surface);
         let t = now();
         let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
         let t_flatten = now() - t;

@@ -4,7 +4,6 @@
 
 use glam::DVec2;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions};
-use slitpath::mesh::refine::{refine_hole_rims, RefineOptions};
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::slitmap::{Mode, PlanarDomain, SlitMapOptions, SlitMapSolver};
 use std::path::PathBuf;
@@ -40,7 +39,7 @@ fn slit_map_invariants_on_shared_meshes() {
             continue;
         };
         let surface = mesh::load(&bytes, &MeshOptions::default()).unwrap().surface;
-        let surface = refine_hole_rims(&surface, &RefineOptions::default());
+        let surface = slitpath::plan::planning_surface(&surface);
         let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(flat.quality.flipped_triangles, 0, "{name}");

@@ -70,12 +70,7 @@ fn link_edges_to_split(s: &Surface, min_valence: usize) -> Vec<Edge> {
             on_hole[v as usize] = true;
         }
     }
-    let mut valence = vec![0usize; n];
-    for t in &s.triangles {
-        for &v in t {
-            valence[v as usize] += 1;
-        }
-    }
+    let valence = face_counts(n, &s.triangles);
     let mut edges: Vec<Edge> = Vec::new();
     for t in &s.triangles {
         for k in 0..3 {
@@ -88,6 +83,17 @@ fn link_edges_to_split(s: &Surface, min_valence: usize) -> Vec<Edge> {
     edges.sort_unstable();
     edges.dedup();
     edges
+}
+
+/// Number of faces around each vertex.
+fn face_counts(n: usize, triangles: &[[u32; 3]]) -> Vec<usize> {
+    let mut count = vec![0usize; n];
+    for t in triangles {
+        for &v in t {
+            count[v as usize] += 1;
+        }
+    }
+    count
 }
 
 /// Splits `edges` (sorted) at their midpoints with a conforming red–green subdivision.
@@ -183,21 +189,11 @@ mod tests {
         mesh::from_triangles(&tri, &MeshOptions::default()).expect("a valid fixture").surface
     }
 
-    fn valence(s: &Surface) -> Vec<usize> {
-        let mut v = vec![0; s.positions.len()];
-        for t in &s.triangles {
-            for &i in t {
-                v[i as usize] += 1;
-            }
-        }
-        v
-    }
-
     #[test]
     fn every_hole_vertex_reaches_the_valence_and_the_surface_is_unchanged() {
         let surface = load("plate_3_holes");
         let r = refine_hole_rims(&surface, &RefineOptions { max_rounds: 3, ..RefineOptions::default() });
-        let val = valence(&r);
+        let val = face_counts(r.positions.len(), &r.triangles);
         for l in r.loops.iter().skip(1) {
             for &v in l {
                 assert!(val[v as usize] >= 6, "hole vertex {v} has {} faces", val[v as usize]);

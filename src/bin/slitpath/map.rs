@@ -4,7 +4,6 @@
 use glam::DVec3;
 use serde::Serialize;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions, FlattenQuality};
-use slitpath::mesh::refine::{refine_hole_rims, RefineOptions};
 use slitpath::mesh::Surface;
 use slitpath::origin;
 use slitpath::slitmap::{self, Mode, PlanarDomain, SlitMapOptions};
@@ -73,9 +72,8 @@ pub struct MapResult {
 
 pub fn run(surface: &Surface, pole: &PoleChoice) -> Result<MapResult, String> {
     surface.check_plannable().map_err(|e| e.to_string())?;
-    // The planner's surface: hole rims refined so slit tips do not fold (the vertex list
-    // written below is this one; the part's own vertices come first, in their order).
-    let refined = refine_hole_rims(surface, &RefineOptions::default());
+    // The planner's surface (hole rims refined): the vertex list written below is this one.
+    let refined = slitpath::plan::planning_surface(surface);
     let surface = &refined;
     let t = Instant::now();
     let flat = flatten::flatten(FlattenInput::from(surface), &FlattenOptions::default()).map_err(|e| e.to_string())?;
