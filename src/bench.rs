@@ -357,20 +357,29 @@ pub fn format_verify(f: &VerifyFigures) -> String {
     )
 }
 
-/// The whole pipeline on one part: faces, holes, rings, path length, max scallop / h and each
-/// stage's time (from the plan report), for `cargo bench --bench plan` and its wasm twin.
+/// The whole pipeline on one part of machining size at R = 3 mm, h = 0.02 mm, 3-axis: faces,
+/// holes, rings, path length, max scallop / h and each stage's time (from the plan report), for
+/// `cargo bench --bench plan` and its wasm twin.
 pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
+    plan_row(name, part, false, now)
+}
+
+/// [`run_plan`] for the shared meshes, most of them unit-scale 3D shapes: where a sixtieth of the
+/// diagonal is below 3 mm the ball is that, h = R/150 (the same ratio), 5-axis with CL output
+/// (their walls exceed a table-table machine's A range).
+pub fn run_plan_scaled(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
+    plan_row(name, part, true, now)
+}
+
+fn plan_row(name: &str, part: &TriMesh, scaled: bool, now: &dyn Fn() -> f64) -> Result<String, String> {
     let t = now();
     let out = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?;
     let read = now() - t;
     let holes = out.surface.loops.len().saturating_sub(1);
-    // R = 3 mm, h = 0.02 mm, 3-axis, on parts of machining size. The shared meshes are
-    // unit-scale 3D shapes: there the ball is a sixtieth of the diagonal, h = R/150 (the same
-    // ratio), 5-axis with CL output (their walls exceed a table-table machine's A range).
     let (lo, hi) = crate::mesh::weld::bounding_box(&out.surface.positions);
     let mut options = crate::plan::PlanOptions::default();
     let small = (hi - lo).length() / 60.0;
-    if small < options.radius_mm {
+    if scaled && small < options.radius_mm {
         options.radius_mm = small;
         options.scallop_mm = small / 150.0;
         options.axes = crate::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 };

@@ -258,6 +258,20 @@ struct Fmt {
 
 impl Fmt {
     fn with(&self, v: f64, decimals: usize) -> String {
+        // Integer digits: formatting floats exactly was a tenth of a 40k-face plan.
+        let x = v * 10f64.powi(decimals as i32);
+        if decimals <= 9 && x.abs() < 9.0e15 {
+            use std::fmt::Write;
+            let n = x.round() as i64;
+            let (p, a) = (10u64.pow(decimals as u32), n.unsigned_abs());
+            let sign = if n < 0 { "-" } else { "" };
+            let mut s = String::with_capacity(24);
+            let _ = match decimals {
+                0 => write!(s, "{sign}{a}"),
+                d => write!(s, "{sign}{}.{:0d$}", a / p, a % p),
+            };
+            return s;
+        }
         let s = format!("{v:.decimals$}");
         match s.strip_prefix('-') {
             Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
@@ -281,6 +295,10 @@ mod tests {
         assert_eq!(f.num(-0.0), "0.0000");
         assert_eq!(f.num(-1.23456), "-1.2346");
         assert_eq!(f.with(0.5, 6), "0.500000");
+        assert_eq!(f.with(12.25, 1), "12.3");
+        assert_eq!(f.with(-7.0, 0), "-7");
+        assert_eq!(f.num(123456.78905), "123456.7891");
+        assert_eq!(f.num(1e300), format!("{:.4}", 1e300));
     }
 
     #[test]

@@ -36,6 +36,8 @@ pub struct Lift<'a> {
     /// faces around it (their edges are strongly curved in the strip), with their corners in the
     /// w plane, where they are located instead.
     pole_faces: Vec<(usize, [DVec2; 3])>,
+    /// Largest |w| of a pole face corner: a point farther out lies in none of them.
+    pole_reach: f64,
     /// Log-polar image triangles (see module docs), indexed for point location.
     strip: StripIndex,
     /// Log-polar corners per face (as in `strip`), for the neighbourhood search.
@@ -52,6 +54,7 @@ impl<'a> Lift<'a> {
         Self {
             surface,
             pole_faces: Vec::new(),
+            pole_reach: f64::NEG_INFINITY,
             strip: StripIndex::new(&per_face),
             corners: per_face,
             vertex_start,
@@ -70,6 +73,7 @@ impl<'a> Lift<'a> {
             faces.sort_unstable();
             faces.dedup();
             self.pole_faces = faces.into_iter().map(|g| (g, map.triangles()[g].map(|v| map.w[v as usize]))).collect();
+            self.pole_reach = self.pole_faces.iter().flat_map(|(_, c)| c.map(DVec2::length)).fold(0.0, f64::max);
         }
         self
     }
@@ -153,6 +157,9 @@ impl<'a> Lift<'a> {
     /// The point lifted through the pole face when it lies in it (or, with `clamp`, when the
     /// pole face is the only candidate left: barycentrics clamped).
     fn in_pole_face(&self, w: DVec2, clamp: bool) -> Option<Lifted> {
+        if !clamp && !(w.length() <= self.pole_reach * (1.0 + 1e-9) + 1e-12) {
+            return None; // the common case, most queries are far from the pole
+        }
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for &(f, c) in &self.pole_faces {
             let b = barycentric(c[0], c[1], c[2], w);

@@ -202,6 +202,8 @@ struct Spacer<'a> {
     trials: usize,
     meridians: usize,
     fold_compromises: usize,
+    /// arg w of the meridians that decided the last ring (see [`Spacer::next_radius`]).
+    binding: Vec<f64>,
 }
 
 /// A boundary vertex whose edges turn by more than this (in 3D) is a corner.
@@ -241,6 +243,8 @@ struct Band {
     upper: Option<Vec<Chain>>,
     /// Index of the meridian that failed last: tested first next time.
     last_fail: usize,
+    /// Meridians the bisection tests (see [`Spacer::next_radius`]).
+    active: Vec<usize>,
 }
 
 impl<'a> Spacer<'a> {
@@ -293,6 +297,7 @@ impl<'a> Spacer<'a> {
             trials: 0,
             meridians: 0,
             fold_compromises: 0,
+            binding: Vec::new(),
         }
     }
 
@@ -336,33 +341,41 @@ impl<'a> Spacer<'a> {
         })
     }
 
-    /// Smallest admissible radius below `band.hi`: a warm-started bracket, then bisection.
+    /// Smallest admissible radius below `band.hi`. Bisecting over every meridian would test all
+    /// of them at every passing trial, although one or two decide the ring: the bisection runs
+    /// over an active set of meridians (those that decided the ring above, then every meridian a
+    /// full check finds failing), and only its result is checked on every meridian.
     fn next_radius(&mut self, band: &mut Band, last_step: Option<f64>) -> Result<f64, SpacingError> {
         let hi = band.hi;
-        let (mut ok, mut bad) = (hi, self.r_min);
-        let mut step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
-        // Expand downwards from the last step until a radius fails.
-        loop {
-            let guess = hi - step;
-            if guess <= self.r_min {
-                break;
+        let step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
+        // Known to fail on some meridian (or the floor).
+        let mut bad = self.r_min;
+        let ok = loop {
+            let (ok_a, bad_a) = self.lowest_on_active(band, bad, step)?;
+            if !(ok_a < hi) {
+                break hi; // nothing below ring k passes: the caller reports no progress
             }
-            if self.admissible(band, guess)? {
-                ok = guess;
-                step *= 1.5;
-            } else {
-                bad = guess;
-                break;
+            match self.first_failure(band, ok_a)? {
+                None => {
+                    // The active meridians that fail just below decide this ring: start the next
+                    // ring's active set from them.
+                    let mut binding = Vec::new();
+                    if bad_a > self.r_min {
+                        for k in 0..band.active.len() {
+                            if !self.meridian_ok(band, band.active[k], bad_a)? {
+                                binding.push(band.thetas[band.active[k]]);
+                            }
+                        }
+                    }
+                    self.binding = binding;
+                    break ok_a;
+                }
+                Some(i) => {
+                    bad = ok_a;
+                    band.active.push(i);
+                }
             }
-        }
-        while ok - bad > self.options.step_tolerance * (hi - ok).max(1e-9) && ok - bad > 1e-13 {
-            let mid = 0.5 * (ok + bad);
-            if self.admissible(band, mid)? {
-                ok = mid;
-            } else {
-                bad = mid;
-            }
-        }
+        };
         // Never run a ring along a slit or through a fold: moving it up only narrows the band;
         // when that reaches ring k, below the fold it must be checked again.
         let mut nudged = ok;
@@ -438,7 +451,15 @@ impl<'a> Spacer<'a> {
                 })
             })
             .collect();
-        Ok((Band { hi, thetas, near_tip, upper, last_fail: 0 }, length))
+        // The meridians next to those that decided the ring above most likely decide this one.
+        let mut active = Vec::new();
+        for &t in &self.binding {
+            let i = thetas.partition_point(|&x| x < t);
+            active.extend([i + thetas.len() - 1, i, i + 1].map(|k| k % thetas.len()));
+        }
+        active.sort_unstable();
+        active.dedup();
+        Ok((Band { hi, thetas, near_tip, upper, last_fail: 0, active }, length))
     }
 
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
@@ -487,16 +508,61 @@ impl<'a> Spacer<'a> {
     /// Whether a ring at `rho` (with ring k at `band.hi` above it, or the boundary) leaves every
     /// tested meridian of the band cut.
     fn admissible(&mut self, band: &mut Band, rho: f64) -> Result<bool, SpacingError> {
+        Ok(self.first_failure(band, rho)?.is_none())
+    }
+
+    /// A meridian left uncut by a ring at `rho`, if any (starting from the last one that failed).
+    fn first_failure(&mut self, band: &mut Band, rho: f64) -> Result<Option<usize>, SpacingError> {
         self.trials += 1;
         let n = band.thetas.len();
         for k in 0..n {
             let i = (band.last_fail + k) % n;
             if !self.meridian_ok(band, i, rho)? {
                 band.last_fail = i;
-                return Ok(false);
+                return Ok(Some(i));
             }
         }
-        Ok(true)
+        Ok(None)
+    }
+
+    /// The smallest radius in (`bad`, `band.hi`) that every active meridian admits, to the step
+    /// tolerance (a bracket expanded down from the last step, then bisection), and the radius
+    /// below it that one of them rejects (`bad` when none did).
+    fn lowest_on_active(&mut self, band: &Band, bad: f64, step: f64) -> Result<(f64, f64), SpacingError> {
+        let hi = band.hi;
+        let passes = |this: &mut Self, rho: f64| -> Result<bool, SpacingError> {
+            this.trials += 1;
+            for &i in &band.active {
+                if !this.meridian_ok(band, i, rho)? {
+                    return Ok(false);
+                }
+            }
+            Ok(true)
+        };
+        let (mut ok, mut bad) = (hi, bad);
+        let mut step = step;
+        loop {
+            let guess = hi - step;
+            if guess <= bad {
+                break;
+            }
+            if passes(self, guess)? {
+                ok = guess;
+                step *= 1.5;
+            } else {
+                bad = guess;
+                break;
+            }
+        }
+        while ok - bad > self.options.step_tolerance * (hi - ok).max(1e-9) && ok - bad > 1e-13 {
+            let mid = 0.5 * (ok + bad);
+            if passes(self, mid)? {
+                ok = mid;
+            } else {
+                bad = mid;
+            }
+        }
+        Ok((ok, bad))
     }
 
     fn meridian_ok(&self, band: &Band, i: usize, rho: f64) -> Result<bool, SpacingError> {
