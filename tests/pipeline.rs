@@ -21,9 +21,9 @@ fn plan(p: &Planner, options: &PlanOptions) -> Plan {
     p.plan(options, &mut |_, _, _| {}, &|| 0.0).expect("plan")
 }
 
-/// The planned fixtures (the spherical cap and the saddle still hit P1 folds at slit tips:
-/// see the issue notes).
-const PLANNED: [&str; 2] = ["plate_3_holes", "freeform_4_holes"];
+/// The planned fixtures (box_boss_pocket and sliver_mesh still jump near a slit: see the issue
+/// notes).
+const PLANNED: [&str; 4] = ["plate_3_holes", "saddle_2_holes", "spherical_cap_hole", "freeform_4_holes"];
 
 /// Whether the segment ab crosses the closed polygon `lp` (flattened plane).
 fn crosses(a: DVec2, b: DVec2, uv: &[DVec2], lp: &[u32]) -> bool {
@@ -120,10 +120,10 @@ fn the_verifier_finds_the_scallop_under_control_and_no_gouge() {
         );
         assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
         assert!(v.p99_scallop_mm <= h, "{name}: p99 scallop {} over h", v.p99_scallop_mm);
-        // Issue 4 asks 1.02·h; with the folds at slit tips gone (issue 3) and the outer corners'
-        // meridians tested, the worst sample is 1.0 h on the plate and 1.0–1.15 h on the
-        // freeform panel, depending on the samples (it was 3.8 h).
-        assert!(v.max_scallop_mm <= 1.4 * h, "{name}: max scallop {}", v.max_scallop_mm);
+        // Issue 4's bound. The freeform panel was at 3.8 h with folds at slit tips, then 1.2 h
+        // from polyline chains round the tips and sparse meridians there; the 40k panel kept
+        // 1.16 h in an ear at a corner until ears were split.
+        assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {}", v.max_scallop_mm);
         assert!(v.max_gouge_mm <= 5e-3, "{name}: gouge {} mm", v.max_gouge_mm);
         assert!(pl.origin.energy.e_min <= pl.origin.centroid_energy.e_min + 1e-9);
     }

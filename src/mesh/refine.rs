@@ -13,6 +13,12 @@
 //! each split adds one face to that vertex's fan. Faces with one, two or three split edges are
 //! cut into two, three or four (a conforming red–green split), so the mesh stays manifold.
 //!
+//! Ears: a face with all three corners on the boundary (typically the triangle at a corner of the
+//! outer loop) has its whole image on |w| = 1 (or on a slit) in the log-polar strip the later
+//! stages locate points in, a sliver of zero height: no ring can be tested against its interior
+//! (panel_6_holes kept a 1.16 h scallop in the ear at a corner). Its interior edges are split
+//! too, so every face has a corner off the boundary.
+//!
 //! Invariants: the refined surface is the same piecewise-flat surface — every child face lies in
 //! its parent's plane, keeps its parent's normal and curvature tensor, and faces keep their
 //! winding. Original vertices keep their indices (new ones are appended), boundary loops gain
@@ -33,11 +39,13 @@ pub struct RefineOptions {
     /// further rounds pile thin triangles against the rims of coarse CAD parts and fold more
     /// than they fix (featuretype, centroid pole: 0 folds after one round, 178 after two).
     pub max_rounds: usize,
+    /// Split the interior edges of faces with all three corners on the boundary. Default true.
+    pub split_ears: bool,
 }
 
 impl Default for RefineOptions {
     fn default() -> Self {
-        Self { min_hole_valence: 6, max_rounds: 1 }
+        Self { min_hole_valence: 6, max_rounds: 1, split_ears: true }
     }
 }
 
@@ -52,7 +60,39 @@ pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
         }
         s = split_edges(&s, &edges);
     }
+    if options.split_ears {
+        let edges = ear_edges(&s);
+        if !edges.is_empty() {
+            s = split_edges(&s, &edges);
+        }
+    }
     s
+}
+
+/// The interior edges of the faces whose three corners are all on the boundary, sorted.
+fn ear_edges(s: &Surface) -> Vec<Edge> {
+    let mut on_boundary = vec![false; s.positions.len()];
+    let mut boundary_edges = std::collections::BTreeSet::new();
+    for l in &s.loops {
+        for (i, &v) in l.iter().enumerate() {
+            on_boundary[v as usize] = true;
+            boundary_edges.insert(key(v, l[(i + 1) % l.len()]));
+        }
+    }
+    let mut edges: Vec<Edge> = Vec::new();
+    for t in &s.triangles {
+        if t.iter().all(|&v| on_boundary[v as usize]) {
+            for k in 0..3 {
+                let e = key(t[k], t[(k + 1) % 3]);
+                if !boundary_edges.contains(&e) {
+                    edges.push(e);
+                }
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    edges
 }
 
 type Edge = (u32, u32);
@@ -219,6 +259,29 @@ mod tests {
         assert!(count.values().all(|&c| c <= 2));
         let boundary = count.values().filter(|&&c| c == 1).count();
         assert_eq!(boundary, r.loops.iter().map(Vec::len).sum::<usize>());
+    }
+
+    #[test]
+    fn ears_are_split_so_every_face_has_a_corner_off_the_boundary() {
+        // Issue 4 (panel_6_holes): the ear at a corner of the outer loop kept a 1.16 h scallop.
+        // A 2 × 2 grid of squares cut along diagonals away from the centre: four corner ears.
+        let positions = (0..9).map(|i| DVec3::new((i % 3) as f64, (i / 3) as f64, 0.0)).collect();
+        let triangles = vec![[0, 1, 3], [1, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 7], [5, 8, 7]];
+        let tri = mesh::TriMesh { positions, triangles };
+        let surface = mesh::from_triangles(&tri, &MeshOptions::default()).expect("a valid grid").surface;
+        let ears = |s: &Surface| {
+            let mut on = vec![false; s.positions.len()];
+            s.loops.iter().flatten().for_each(|&v| on[v as usize] = true);
+            s.triangles.iter().filter(|t| t.iter().all(|&v| on[v as usize])).count()
+        };
+        assert!(ears(&surface) > 0, "the fixture has ears at its corners");
+        let r = refine_hole_rims(&surface, &RefineOptions::default());
+        assert_eq!(ears(&r), 0);
+        let area = |s: &Surface| s.face_areas.iter().sum::<f64>();
+        assert!((area(&r) - area(&surface)).abs() < 1e-9 * area(&surface));
+        assert_eq!(r.euler_characteristic(), surface.euler_characteristic());
+        let without = refine_hole_rims(&surface, &RefineOptions { split_ears: false, ..RefineOptions::default() });
+        assert!(ears(&without) > 0 && without.triangles.len() < r.triangles.len());
     }
 
     #[test]
