@@ -362,10 +362,16 @@ impl Symbolic {
 
     /// Solves L Lᵀ y = y in the permuted numbering.
     fn solve_permuted(&self, l: &[f64], y: &mut [f64]) {
+        // The rows below a supernode's diagonal block are gathered into `below` once per
+        // supernode, so the inner loops run over contiguous memory; no other column touches them
+        // meanwhile, so every operation and its order are as without the gather (same bits).
         let ns = self.n_supernodes();
+        let mut below: Vec<f64> = Vec::new();
         for s in 0..ns {
             let (b, cols, pat, blk) = self.block(l, s);
             let rows = cols + pat.len();
+            below.clear();
+            below.extend(pat.iter().map(|&r| y[r as usize]));
             for j in 0..cols {
                 let col = &blk[j * rows..(j + 1) * rows];
                 let yj = y[b + j] / col[j];
@@ -373,22 +379,27 @@ impl Symbolic {
                 for i in j + 1..cols {
                     y[b + i] -= col[i] * yj;
                 }
-                for (k, &r) in pat.iter().enumerate() {
-                    y[r as usize] -= col[cols + k] * yj;
+                for (x, &c) in below.iter_mut().zip(&col[cols..]) {
+                    *x -= c * yj;
                 }
+            }
+            for (&r, &x) in pat.iter().zip(&below) {
+                y[r as usize] = x;
             }
         }
         for s in (0..ns).rev() {
             let (b, cols, pat, blk) = self.block(l, s);
             let rows = cols + pat.len();
+            below.clear();
+            below.extend(pat.iter().map(|&r| y[r as usize]));
             for j in (0..cols).rev() {
                 let col = &blk[j * rows..(j + 1) * rows];
                 let mut sum = y[b + j];
                 for i in j + 1..cols {
                     sum -= col[i] * y[b + i];
                 }
-                for (k, &r) in pat.iter().enumerate() {
-                    sum -= col[cols + k] * y[r as usize];
+                for (&c, &x) in col[cols..].iter().zip(&below) {
+                    sum -= c * x;
                 }
                 y[b + j] = sum / col[j];
             }

@@ -712,7 +712,10 @@ fn dist_chain(q: DVec3, chain: &Chain) -> f64 {
     let smooth = parabola_dist2(a - q, b - a - v, v, t);
     let (ab, bc) = (b - a, c - b);
     let d2 = if ab.dot(bc) >= SHARP_TURN_COS * ab.length() * bc.length() { smooth } else { smooth.max(poly) };
-    d2.sqrt()
+    // The centres themselves are on the curve: never farther than the nearest of them (a chain
+    // folding back on itself made the parabola of the wrong half the estimate, and no radius
+    // passed on face_holes, beetle and four more shared meshes).
+    chain.iter().map(|c| c.distance_squared(q)).fold(d2, f64::min).sqrt()
 }
 
 /// cos 15°: a chain half turning more than this is sharp (see [`dist_chain`]).
