@@ -12,7 +12,8 @@ fn main() {
     let now = || start.elapsed().as_secs_f64() * 1e3;
     // `SLITPATH_BENCH_CASE=panel cargo bench --bench plan` runs only the cases whose name has it.
     let only = std::env::var("SLITPATH_BENCH_CASE").unwrap_or_default();
-    let mut cases: Vec<(String, _, bool)> = plan_cases().into_iter().map(|(n, m)| (n, m, false)).collect();
+    let mut cases: Vec<(String, _, bool)> =
+        plan_cases().into_iter().filter(|(n, _)| n.contains(&only)).map(|(n, m)| (n, m, false)).collect();
     let dir = [std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes"), "/work/shared/meshes".into()]
         .into_iter()
         .find(|d| d.is_dir())
@@ -28,15 +29,17 @@ fn main() {
         "featuretype.stl",
         "ktoolcav.stl",
         "beetle.stl",
-    ] {
+    ]
+    .into_iter()
+    .filter(|name| name.contains(&only))
+    {
         match std::fs::read(dir.join(name)) {
-            _ if !only.is_empty() && !name.contains(&only) => {}
             Ok(bytes) => cases.push((name.to_string(), stl::read(&bytes, usize::MAX).expect("valid STL"), true)),
             Err(_) => eprintln!("skipped: {name} is absent"),
         }
     }
     println!("whole pipeline, native\n{PLAN_HEADER}");
-    for (name, mesh, shared) in cases.iter().filter(|(n, _, _)| n.contains(&only)) {
+    for (name, mesh, shared) in &cases {
         let row = if *shared { run_plan_scaled(name, mesh, &now) } else { run_plan(name, mesh, &now) };
         match row {
             Ok(row) => println!("{row}"),

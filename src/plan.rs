@@ -149,7 +149,7 @@ impl Plan {
 /// The stages reported to a progress callback, in order.
 pub const STAGES: [&str; 7] = ["origin", "spacing", "spiral", "toolpath", "post", "verify", "done"];
 
-/// The surface every conformal stage works on: `surface` with its hole rims refined
+/// The surface every conformal stage works on: `surface` with its hole rims refined and ears split
 /// ([`crate::mesh::refine`]; the part's vertices first, in their order). The `map` CLI uses it
 /// too, so its vertex list is the planner's.
 pub fn planning_surface(surface: &Surface) -> Surface {

@@ -14,8 +14,9 @@
 //!    of bosses and pockets become holes.
 //! 5. [`geometry`]: angle-weighted vertex normals and the per-face curvature tensor of
 //!    Rusinkiewicz 2004 (seed 000 ref. [39]), needed by the scallop energy (seed 000 §2.3).
-//! 6. [`refine`]: for the planner, more faces around each hole vertex (same geometry), so the
-//!    slit map can open every hole into a slit without folding a triangle.
+//! 6. [`refine`]: for the planner, more faces around each hole vertex and ears split (same
+//!    geometry), so the slit map can open every hole into a slit without folding a triangle and
+//!    every face has a corner off the boundary.
 //!
 //! Invariants of the output [`Surface`]: every edge has one or two faces, every vertex has a single
 //! fan, faces are wound counter-clockwise seen from the tool side, `loops[0]` is the outer boundary

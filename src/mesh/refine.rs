@@ -1,5 +1,5 @@
 //! Rim refinement: more triangles around every hole vertex, so the slit map can open each hole
-//! into a slit without folding a triangle.
+//! into a slit without folding a triangle, and no face with all its corners on the boundary.
 //!
 //! Why (seed 000 §2.1, DESIGN.md "slitmap"): the slit map sends a hole's boundary onto a
 //! two-sided arc. Near the point that becomes the arc's tip the map behaves like `(z − z₀)²`: the
@@ -49,8 +49,9 @@ impl Default for RefineOptions {
     }
 }
 
-/// The surface with every hole vertex's fan refined (a clone when nothing needs splitting).
-/// `loops[1..]` are the holes; the outer loop maps onto a circle and needs nothing.
+/// The surface with every hole vertex's fan refined and, with [`RefineOptions::split_ears`], its
+/// ears split (a clone when nothing needs splitting). `loops[1..]` are the holes; the outer
+/// loop's vertices map onto a circle and need no fan refinement.
 pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
     let mut s = surface.clone();
     for _ in 0..options.max_rounds {

@@ -162,13 +162,20 @@ const CORNER_OFFSETS: [f64; 12] = [0.0, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 3.5e-4, 5e
 /// The offsets of `all` that matter for a band below ring `hi` near a feature (slit tip, corner)
 /// at radius `rho`: at a distance δ in log-radius from it the map's detail round the feature is
 /// about δ wide in angle, so offsets much finer than δ all test the same place and are dropped.
-fn offsets_at(all: &[f64], hi: f64, rho: f64) -> Vec<f64> {
+fn offsets_at(all: &[f64], hi: f64, rho: f64) -> impl Iterator<Item = f64> + '_ {
     let delta = crate::num::ln(hi / rho).abs();
-    all.iter().copied().filter(|&d| d == 0.0 || d >= delta / 8.0).collect()
+    all.iter().copied().filter(move |&d| d == 0.0 || d >= delta / 8.0)
 }
 
-/// Ball centres near one meridian angle on one ring: a short chain of capsule axes.
-type Chain = [DVec3; 5];
+/// Ball centres near one meridian angle on one ring (five, spanning about ±R along it), with the
+/// parabola through each half computed once: a chain is measured against many points.
+#[derive(Debug, Clone, Copy)]
+struct Chain {
+    centres: [DVec3; 5],
+    /// Per half (centres 0–2, then 2–4): u and v of P(t) = a + t·u + t²·v through its three
+    /// centres at t = 0, 1, 2, and whether it turns sharply (see [`Chain::distance`]).
+    halves: [(DVec3, DVec3, bool); 2],
+}
 
 /// One-off entry: the ring radii for `map` on `surface`.
 pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Result<Rings, SpacingError> {
@@ -441,9 +448,8 @@ impl<'a> Spacer<'a> {
         }
         // The ends of a hole are where the rings turn around it: test them densely.
         for s in &self.slits {
-            let offsets = offsets_at(&TIP_OFFSETS, hi, s.radius);
             for (t, out) in [(s.theta_start, -1.0), (s.theta_start + s.extent, 1.0)] {
-                for &d in &offsets {
+                for d in offsets_at(&TIP_OFFSETS, hi, s.radius) {
                     thetas.push((t + out * d).rem_euclid(TAU));
                     thetas.push((t - out * d).rem_euclid(TAU));
                 }
@@ -522,10 +528,16 @@ impl<'a> Spacer<'a> {
         let probe = 1e-4;
         let speed = (centre(theta + probe)? - c0).length() / probe;
         if !(speed > 1e-9) {
-            return Ok([c0; 5]); // the pole: every angle is the same point
+            return Ok(Chain::new([c0; 5])); // the pole: every angle is the same point
         }
         let dt = (0.5 * self.ball / speed).min(0.4);
-        Ok([centre(theta - 2.0 * dt)?, centre(theta - dt)?, c0, centre(theta + dt)?, centre(theta + 2.0 * dt)?])
+        Ok(Chain::new([
+            centre(theta - 2.0 * dt)?,
+            centre(theta - dt)?,
+            c0,
+            centre(theta + dt)?,
+            centre(theta + 2.0 * dt)?,
+        ]))
     }
 
     /// Whether a ring at `rho` (with ring k at `band.hi` above it, or the boundary) leaves every
@@ -606,12 +618,12 @@ impl<'a> Spacer<'a> {
             (None, Some(_)) => Ok(false),
             // The boundary point is taken a hair inside: exactly on |w| = 1 the inverse map may
             // pick the neighbouring boundary face of a corner (wavy_mesh_with_hole jumped 0.1 mm).
-            (None, None) => Ok(dist_chain(self.q(band.hi * (1.0 - 1e-9), theta)?, &lower) <= r),
+            (None, None) => Ok(lower.distance(self.q(band.hi * (1.0 - 1e-9), theta)?) <= r),
             // A hole in between: ring k cuts down to its upper rim, this ring up to its lower one.
             (Some(upper), Some(s)) => {
                 let up = self.q(s.radius + s.sag, theta)?;
                 let down = self.q((s.radius - s.sag).max(rho), theta)?;
-                Ok(dist_chain(up, &upper[i]) <= r && dist_chain(down, &lower) <= r)
+                Ok(upper[i].distance(up) <= r && lower.distance(down) <= r)
             }
             (Some(upper), None) => {
                 if band.near_tip[i] && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)? {
@@ -627,7 +639,7 @@ impl<'a> Spacer<'a> {
         const N: usize = 16;
         for k in 1..N {
             let q = self.q(lo + (hi - lo) * k as f64 / N as f64, theta)?;
-            if dist_chain(q, upper).min(dist_chain(q, lower)) > self.ball {
+            if upper.distance(q).min(lower.distance(q)) > self.ball {
                 return Ok(false);
             }
         }
@@ -639,12 +651,12 @@ impl<'a> Spacer<'a> {
     fn cusp_ok(&self, upper: &Chain, lower: &Chain, lo: f64, hi: f64, theta: f64) -> Result<bool, SpacingError> {
         let r = self.ball;
         let qa = self.q(lo, theta)?;
-        let (du_a, dl_a) = (dist_chain(qa, upper), dist_chain(qa, lower));
+        let (du_a, dl_a) = (upper.distance(qa), lower.distance(qa));
         if du_a <= r {
             return Ok(true);
         }
         let qb = self.q(hi, theta)?;
-        let (du_b, dl_b) = (dist_chain(qb, upper), dist_chain(qb, lower));
+        let (du_b, dl_b) = (upper.distance(qb), lower.distance(qb));
         if dl_b <= r {
             return Ok(true);
         }
@@ -660,7 +672,7 @@ impl<'a> Spacer<'a> {
         for _ in 0..40 {
             let s = (a * gb - b * ga) / (gb - ga);
             let q = self.q(s, theta)?;
-            let (du, dl) = (dist_chain(q, upper), dist_chain(q, lower));
+            let (du, dl) = (upper.distance(q), lower.distance(q));
             worst = worst.max(du.min(dl));
             if worst > r {
                 return Ok(false);
@@ -687,38 +699,45 @@ impl<'a> Spacer<'a> {
     }
 }
 
-/// Distance from `q` to the centre curve the chain samples: a parabola through each half (three
-/// centres at equal steps of arg w). The polyline through the centres, 1.5 mm chords, lay up to
-/// 0.07 mm inside a ring that bends tightly round a slit tip, and the cusp there was found too
-/// low (issue 4, freeform_4_holes at R = 3 mm). Where a half turns sharply a parabola can
-/// overshoot the curve, so there the farther of parabola and polyline is taken (freeform_4_holes:
-/// max scallop 1.018 h without this, 1.002 h with it).
-fn dist_chain(q: DVec3, chain: &Chain) -> f64 {
-    // The nearest chord picks the half and the start of the Newton steps on its parabola.
-    let (mut poly, mut k, mut s) = (f64::INFINITY, 0, 0.0);
-    for j in 0..4 {
-        let (d2, sj) = segment_dist2_at(q, chain[j], chain[j + 1]);
-        if d2 < poly {
-            (poly, k, s) = (d2, j, sj);
-        }
+impl Chain {
+    fn new(centres: [DVec3; 5]) -> Self {
+        let half = |a: DVec3, b: DVec3, c: DVec3| {
+            let v = (a - 2.0 * b + c) * 0.5;
+            let (ab, bc) = (b - a, c - b);
+            (b - a - v, v, !(ab.dot(bc) >= SHARP_TURN_COS * ab.length() * bc.length()))
+        };
+        let c = centres;
+        Self { centres, halves: [half(c[0], c[1], c[2]), half(c[2], c[3], c[4])] }
     }
-    let (a, b, c, t) = if k < 2 {
-        (chain[0], chain[1], chain[2], k as f64 + s)
-    } else {
-        (chain[2], chain[3], chain[4], (k - 2) as f64 + s)
-    };
-    // P(t) = a + t·u + t²·v with P(0) = a, P(1) = b, P(2) = c.
-    let v = (a - 2.0 * b + c) * 0.5;
-    let smooth = parabola_dist2(a - q, b - a - v, v, t);
-    let (ab, bc) = (b - a, c - b);
-    let d2 = if ab.dot(bc) >= SHARP_TURN_COS * ab.length() * bc.length() { smooth } else { smooth.max(poly) };
-    // The centres themselves are on the curve: never farther than the nearest of them (a chain
-    // folding back on itself made the parabola of the wrong half the estimate, and no radius
-    // passed on face_holes, beetle and four more shared meshes).
-    chain.iter().map(|c| c.distance_squared(q)).fold(d2, f64::min).sqrt()
+
+    /// Distance from `q` to the centre curve the chain samples: the parabola through each half.
+    /// The polyline through the centres, 1.5 mm chords, lay up to 0.07 mm inside a ring that
+    /// bends tightly round a slit tip, and the cusp there was found too low (issue 4,
+    /// freeform_4_holes at R = 3 mm). Where a half turns sharply a parabola can overshoot the
+    /// curve, so there the farther of parabola and polyline is taken (freeform_4_holes: max
+    /// scallop 1.018 h without this, 1.002 h with it).
+    fn distance(&self, q: DVec3) -> f64 {
+        let c = &self.centres;
+        // The nearest chord picks the half and the start of the Newton steps on its parabola.
+        let (mut poly, mut k, mut s) = (f64::INFINITY, 0, 0.0);
+        for j in 0..4 {
+            let (d2, sj) = segment_dist2_at(q, c[j], c[j + 1]);
+            if d2 < poly {
+                (poly, k, s) = (d2, j, sj);
+            }
+        }
+        let (h, a, t) = if k < 2 { (0, c[0], k as f64 + s) } else { (1, c[2], (k - 2) as f64 + s) };
+        let (u, v, sharp) = self.halves[h];
+        let smooth = parabola_dist2(a - q, u, v, t);
+        let d2 = if sharp { smooth.max(poly) } else { smooth };
+        // The centres themselves are on the curve: never farther than the nearest of them (a
+        // chain folding back on itself made the parabola of the wrong half the estimate, and no
+        // radius passed on face_holes, beetle and four more shared meshes).
+        c.iter().map(|x| x.distance_squared(q)).fold(d2, f64::min).sqrt()
+    }
 }
 
-/// cos 15°: a chain half turning more than this is sharp (see [`dist_chain`]).
+/// cos 15°: a chain half turning more than this is sharp (see [`Chain::distance`]).
 const SHARP_TURN_COS: f64 = 0.965_925_826_289_068;
 
 /// min over t ∈ [0, 2] of |d + t·u + t²·v|², by Newton steps from `t`.
@@ -756,7 +775,7 @@ mod tests {
     use super::*;
 
     /// Brute force: the distance to the two parabolas, densely sampled.
-    fn oracle(q: DVec3, c: &Chain) -> f64 {
+    fn oracle(q: DVec3, c: &[DVec3; 5]) -> f64 {
         let mut best = f64::INFINITY;
         for (a, b, e) in [(c[0], c[1], c[2]), (c[2], c[3], c[4])] {
             let v = (a - 2.0 * b + e) * 0.5;
@@ -775,12 +794,12 @@ mod tests {
         // (each half turns about 21°, sharp: there the polyline's distance, when farther, is
         // taken), and a gently bent one.
         for radius in [4.0, 40.0] {
-            let c: Chain = [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k: f64| {
+            let c = [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k: f64| {
                 let a = 1.5 * k / radius;
                 DVec3::new(radius * a.sin(), radius * (1.0 - a.cos()), 0.0)
             });
             for q in [DVec3::new(0.3, 2.0, 0.5), DVec3::new(-1.1, -1.5, 0.2), DVec3::new(2.5, 0.4, -1.0)] {
-                let d = dist_chain(q, &c);
+                let d = Chain::new(c).distance(q);
                 let poly = (0..4).map(|k| segment_dist2(q, c[k], c[k + 1])).fold(f64::INFINITY, f64::min).sqrt();
                 let want = if radius < 10.0 { oracle(q, &c).max(poly) } else { oracle(q, &c) };
                 assert!((d - want).abs() < 1e-6, "radius {radius}, q {q}: {d} vs {want}");

@@ -72,7 +72,7 @@ pub struct MapResult {
 
 pub fn run(surface: &Surface, pole: &PoleChoice) -> Result<MapResult, String> {
     surface.check_plannable().map_err(|e| e.to_string())?;
-    // The planner's surface (hole rims refined): the vertex list written below is this one.
+    // The planner's surface (hole rims refined, ears split): the vertex list written below is this one.
     let refined = slitpath::plan::planning_surface(surface);
     let surface = &refined;
     let t = Instant::now();

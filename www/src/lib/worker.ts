@@ -45,7 +45,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     if (isFatal(error)) throw error;
     conformalError = errorMessage(error);
   }
-  // After flattening: the planner's surface has its hole rims refined (more vertices).
+  // After flattening: the planner's surface has its hole rims refined and ears split (more vertices).
   const { positions, triangles } = part.surface();
   currentUv = uv;
   currentTriangles = triangles.slice();
