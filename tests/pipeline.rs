@@ -21,9 +21,9 @@ fn plan(p: &Planner, options: &PlanOptions) -> Plan {
     p.plan(options, &mut |_, _, _| {}, &|| 0.0).expect("plan")
 }
 
-/// The planned fixtures (box_boss_pocket and sliver_mesh still jump near a slit: see the issue
-/// notes).
-const PLANNED: [&str; 4] = ["plate_3_holes", "saddle_2_holes", "spherical_cap_hole", "freeform_4_holes"];
+/// The planned fixtures.
+const PLANNED: [&str; 6] =
+    ["plate_3_holes", "saddle_2_holes", "spherical_cap_hole", "freeform_4_holes", "box_boss_pocket", "sliver_mesh"];
 
 /// Whether the segment ab crosses the closed polygon `lp` (flattened plane).
 fn crosses(a: DVec2, b: DVec2, uv: &[DVec2], lp: &[u32]) -> bool {

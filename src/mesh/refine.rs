@@ -13,6 +13,10 @@
 //! each split adds one face to that vertex's fan. Faces with one, two or three split edges are
 //! cut into two, three or four (a conforming red–green split), so the mesh stays manifold.
 //!
+//! Long edges: first every edge longer than a fraction of the part's size is split, so that no
+//! face spans a large part of the slit domain, where its straight image could not follow the map
+//! (see [`RefineOptions::max_edge_fraction`]).
+//!
 //! Ears: a face with all three corners on the boundary (typically the triangle at a corner of the
 //! outer loop) has its whole image on |w| = 1 (or on a slit) in the log-polar strip the later
 //! stages locate points in, a sliver of zero height: no ring can be tested against its interior
@@ -32,6 +36,12 @@ use std::collections::BTreeMap;
 /// Options of the rim refinement. `Default` gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RefineOptions {
+    /// Edges longer than this fraction of the bounding-box diagonal are split first (repeatedly,
+    /// at midpoints), `None` to keep them. Default 1/40: a P1 map cannot follow the slit map
+    /// across a face that spans much of the part. CAD meshes (fans of faces up to 0.7 of the
+    /// diagonal long) folded in the log-polar strip and broke the spiral; sliver_mesh's 10 mm
+    /// rows made a ring near the outer circle jump 2 mm.
+    pub max_edge_fraction: Option<f64>,
     /// Every hole vertex ends with at least this many faces, as far as `max_rounds` allows.
     /// Default 6 (each face then opens by at most about 60° at a slit tip).
     pub min_hole_valence: usize,
@@ -45,15 +55,31 @@ pub struct RefineOptions {
 
 impl Default for RefineOptions {
     fn default() -> Self {
-        Self { min_hole_valence: 6, max_rounds: 1, split_ears: true }
+        Self { max_edge_fraction: Some(1.0 / 40.0), min_hole_valence: 6, max_rounds: 1, split_ears: true }
     }
 }
 
-/// The surface with every hole vertex's fan refined and, with [`RefineOptions::split_ears`], its
-/// ears split (a clone when nothing needs splitting). `loops[1..]` are the holes; the outer
-/// loop's vertices map onto a circle and need no fan refinement.
+/// Long-edge splitting stops after this many rounds (each halves the longest edge: 2^-12 of
+/// the diagonal is far below any sensible fraction).
+const MAX_LONG_EDGE_ROUNDS: usize = 12;
+
+/// The surface with its long edges split ([`RefineOptions::max_edge_fraction`]), every hole
+/// vertex's fan refined and, with [`RefineOptions::split_ears`], its ears split (a clone when
+/// nothing needs splitting). `loops[1..]` are the holes; the outer loop's vertices map onto a
+/// circle and need no fan refinement.
 pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
     let mut s = surface.clone();
+    if let Some(fraction) = options.max_edge_fraction {
+        let (lo, hi) = super::weld::bounding_box(&s.positions);
+        let max_len = fraction * (hi - lo).length();
+        for _ in 0..MAX_LONG_EDGE_ROUNDS {
+            let edges = long_edges(&s, max_len);
+            if edges.is_empty() {
+                break;
+            }
+            s = split_edges(&s, &edges);
+        }
+    }
     for _ in 0..options.max_rounds {
         let edges = link_edges_to_split(&s, options.min_hole_valence);
         if edges.is_empty() {
@@ -68,6 +94,19 @@ pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
         }
     }
     s
+}
+
+/// The edges longer than `max_len`, sorted.
+fn long_edges(s: &Surface, max_len: f64) -> Vec<Edge> {
+    let mut edges: Vec<Edge> = s
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
+        .filter(|&(a, b)| s.positions[a as usize].distance(s.positions[b as usize]) > max_len)
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
 }
 
 /// The interior edges of the faces whose three corners are all on the boundary, sorted.
@@ -276,19 +315,50 @@ mod tests {
             s.triangles.iter().filter(|t| t.iter().all(|&v| on[v as usize])).count()
         };
         assert!(ears(&surface) > 0, "the fixture has ears at its corners");
-        let r = refine_hole_rims(&surface, &RefineOptions::default());
+        let only_ears = RefineOptions { max_edge_fraction: None, ..RefineOptions::default() };
+        let r = refine_hole_rims(&surface, &only_ears);
         assert_eq!(ears(&r), 0);
         let area = |s: &Surface| s.face_areas.iter().sum::<f64>();
         assert!((area(&r) - area(&surface)).abs() < 1e-9 * area(&surface));
         assert_eq!(r.euler_characteristic(), surface.euler_characteristic());
-        let without = refine_hole_rims(&surface, &RefineOptions { split_ears: false, ..RefineOptions::default() });
+        let without = refine_hole_rims(&surface, &RefineOptions { split_ears: false, ..only_ears });
         assert!(ears(&without) > 0 && without.triangles.len() < r.triangles.len());
     }
 
     #[test]
     fn a_surface_without_holes_is_left_alone() {
         let surface = load("unit_disk");
-        let r = refine_hole_rims(&surface, &RefineOptions::default());
+        let r = refine_hole_rims(&surface, &RefineOptions { max_edge_fraction: None, ..RefineOptions::default() });
         assert_eq!(r.triangles, surface.triangles);
+    }
+
+    #[test]
+    fn long_edges_are_split_until_none_is_longer_than_the_fraction() {
+        // sliver_mesh: 10 mm rows on a 117 mm part, and 2 µm needles beside them.
+        let surface = load("sliver_mesh");
+        let (lo, hi) = crate::mesh::weld::bounding_box(&surface.positions);
+        let max_len = (hi - lo).length() / 40.0;
+        let longest = |s: &Surface| {
+            s.triangles
+                .iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+                .map(|(a, b)| s.positions[a as usize].distance(s.positions[b as usize]))
+                .fold(0.0, f64::max)
+        };
+        assert!(longest(&surface) > 3.0 * max_len);
+        let r = refine_hole_rims(
+            &surface,
+            &RefineOptions { min_hole_valence: 0, split_ears: false, ..RefineOptions::default() },
+        );
+        assert!(longest(&r) <= max_len, "longest edge {} mm > {max_len} mm", longest(&r));
+        let area = |s: &Surface| s.face_areas.iter().sum::<f64>();
+        assert!((area(&r) - area(&surface)).abs() < 1e-9 * area(&surface));
+        assert_eq!(r.euler_characteristic(), surface.euler_characteristic());
+        assert_eq!(&r.positions[..surface.positions.len()], &surface.positions[..]);
+        // The loops keep their vertices, in order, with the midpoints of split edges between.
+        for (a, b) in surface.loops.iter().zip(&r.loops) {
+            let kept: Vec<u32> = b.iter().copied().filter(|&v| (v as usize) < surface.positions.len()).collect();
+            assert_eq!(&kept, a);
+        }
     }
 }

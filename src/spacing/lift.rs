@@ -11,7 +11,7 @@
 use crate::mesh::topology::vertex_faces;
 use crate::mesh::Surface;
 use crate::num;
-use crate::slitmap::{barycentric, clamp_barycentric, Location, SlitMap};
+use crate::slitmap::{barycentric, clamp_barycentric, SlitMap};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -32,12 +32,8 @@ pub struct Lifted {
 #[derive(Debug, Clone)]
 pub struct Lift<'a> {
     surface: &'a Surface,
-    /// Disk maps: the face containing the pole (its log-polar image is not a triangle) and the
-    /// faces around it (their edges are strongly curved in the strip), with their corners in the
-    /// w plane, where they are located instead.
-    pole_faces: Vec<(usize, [DVec2; 3])>,
-    /// Largest |w| of a pole face corner: a point farther out lies in none of them.
-    pole_reach: f64,
+    /// Disk maps: the faces around the pole, lifted through the w plane (see [`PoleStar`]).
+    star: Option<PoleStar>,
     /// Log-polar image triangles (see module docs), indexed for point location.
     strip: StripIndex,
     /// Log-polar corners per face (as in `strip`), for the neighbourhood search.
@@ -49,33 +45,41 @@ pub struct Lift<'a> {
 
 impl<'a> Lift<'a> {
     pub fn new(surface: &'a Surface, map: &SlitMap) -> Self {
-        let per_face = map.log_polar_corners();
+        let mut corners = map.log_polar_corners();
         let (vertex_start, vertex_faces) = vertex_faces(map.w.len(), map.triangles());
-        Self {
-            surface,
-            pole_faces: Vec::new(),
-            pole_reach: f64::NEG_INFINITY,
-            strip: StripIndex::new(&per_face),
-            corners: per_face,
-            vertex_start,
-            vertex_faces,
+        let star = map.pole_face.map(|f| PoleStar::new(map, f, &corners, &vertex_start, &vertex_faces));
+        // The star's faces are never located in the strip (near the pole their log-polar images
+        // fold): NaN corners make every barycentric test of theirs fail.
+        for &(f, _) in star.iter().flat_map(|s| &s.faces) {
+            corners[f] = [DVec2::NAN; 3];
         }
-        .with_pole_faces(map)
+        Self { surface, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
     }
 
-    fn with_pole_faces(mut self, map: &SlitMap) -> Self {
-        if let Some(f) = map.pole_face {
-            let mut faces: Vec<usize> = vec![f];
-            for &v in &map.triangles()[f] {
-                let (a, b) = (self.vertex_start[v as usize] as usize, self.vertex_start[v as usize + 1] as usize);
-                faces.extend(self.vertex_faces[a..b].iter().map(|&g| g as usize));
-            }
-            faces.sort_unstable();
-            faces.dedup();
-            self.pole_faces = faces.into_iter().map(|g| (g, map.triangles()[g].map(|v| map.w[v as usize]))).collect();
-            self.pole_reach = self.pole_faces.iter().flat_map(|(_, c)| c.map(DVec2::length)).fold(0.0, f64::max);
-        }
-        self
+    /// Faces whose log-polar image is folded over (P1 folds at slit tips: the strip straightens
+    /// the slit, and a face reaching round its tip turns over), the pole star's aside, and that
+    /// lie along the rings (wider in angle, as arc length, than in radius): a ring running
+    /// through one would jump across the face. A fold standing across the rings (needles, like
+    /// sliver_mesh's 2 µm columns) is only crossed, over its width: those are left out, their
+    /// radius range would only push rings apart for nothing.
+    pub fn folded_faces(&self) -> Vec<usize> {
+        // (arg w, |w|) reverses orientation: a face counter-clockwise on the surface has a
+        // negative signed area in the strip.
+        let area = |c: &[DVec2; 3]| (c[1] - c[0]).perp_dot(c[2] - c[0]);
+        (0..self.corners.len())
+            .filter(|&f| {
+                let c = &self.corners[f];
+                let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+                area(c) >= 0.0 && (hi.x - lo.x) * hi.y >= hi.y - lo.y && self.min_altitude_mm(f) > FOLD_THIN_MM
+            })
+            .collect()
+    }
+
+    /// The smallest altitude of face `f` on the surface, mm.
+    fn min_altitude_mm(&self, f: usize) -> f64 {
+        let [a, b, c] = self.surface.triangles[f].map(|v| self.surface.positions[v as usize]);
+        let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+        2.0 * self.surface.face_areas[f] / longest.max(f64::MIN_POSITIVE)
     }
 
     /// The surface point whose image is `w`.
@@ -86,9 +90,7 @@ impl<'a> Lift<'a> {
     /// The surface point whose image is `rho · e^{iθ}` (the nearest image triangle when it falls
     /// just outside the image, e.g. by rounding on the unit circle).
     pub fn polar(&self, rho: f64, theta: f64) -> Option<Lifted> {
-        let (s, c) = num::sin_cos(theta);
-        let w = DVec2::new(rho * c, rho * s);
-        if let Some(lifted) = self.in_pole_face(w, false) {
+        if let Some(lifted) = self.in_star(rho, theta, false) {
             return Some(lifted);
         }
         let x = (theta + PI).rem_euclid(TAU) - PI;
@@ -101,24 +103,29 @@ impl<'a> Lift<'a> {
             _ => {
                 // Not in the strip's triangles: the pole face's region, or just outside the image
                 // (rounding at |w| = 1 or R_A): then the nearest face, clamped.
-                if let Some(lifted) = self.in_pole_face(w, true) {
+                if let Some(lifted) = self.in_star(rho, theta, true) {
                     return Some(lifted);
                 }
                 let (_, f, b) = best?;
                 (f, clamp_barycentric(b))
             }
         };
-        let loc = Location { face, vertices: self.surface.triangles[face], bary };
-        Some(self.lifted(w, loc.face, self.surface.triangles[loc.face], loc.bary))
+        let (sin, cos) = num::sin_cos(theta);
+        Some(self.lifted(DVec2::new(rho * cos, rho * sin), face, self.surface.triangles[face], bary))
     }
 
+    /// Smallest barycentric coordinate down to which a stuck walk keeps its face (see
+    /// [`Lift::polar_near`]).
+    const FOLD_GAP: f64 = 0.25;
+
     /// Like [`Lift::polar`], but found by walking from face `near` (the previous point's face)
-    /// over faces that share a vertex, towards the face containing the point. Consecutive
-    /// points of a curve then stay on neighbouring faces even where the P1 image folds over
-    /// itself (slit tips): the lifted curve is continuous there instead of jumping to an
-    /// overlapping face elsewhere. Falls back to [`Lift::polar`] when the walk gets stuck.
+    /// towards the face containing the point: first across edges ([`Lift::edge_walk`]), then
+    /// over faces that share a vertex, by score. Consecutive points of a curve then stay on
+    /// neighbouring faces even where the P1 image folds over itself (slit tips): the lifted
+    /// curve is continuous there instead of jumping to an overlapping face elsewhere. Stuck
+    /// just outside a face, the face's nearest point; farther out, [`Lift::polar`].
     pub fn polar_near(&self, rho: f64, theta: f64, near: u32) -> Option<Lifted> {
-        if self.in_pole_face(DVec2::new(rho * num::cos(theta), rho * num::sin(theta)), false).is_none() {
+        if self.in_star(rho, theta, false).is_none() {
             let x = (theta + PI).rem_euclid(TAU) - PI;
             let score = |f: usize| {
                 let c = self.corners[f];
@@ -128,6 +135,10 @@ impl<'a> Lift<'a> {
                 let m = bary[0].min(bary[1]).min(bary[2]);
                 (if m.is_finite() { m } else { f64::NEG_INFINITY }, bary)
             };
+            if let Some((f, bary)) = self.edge_walk(near as usize, &score) {
+                let (s, c) = num::sin_cos(theta);
+                return Some(self.lifted(DVec2::new(rho * c, rho * s), f, self.surface.triangles[f], bary));
+            }
             let mut f = near as usize;
             let (mut m, mut bary) = score(f);
             for _ in 0..256 {
@@ -150,32 +161,66 @@ impl<'a> Lift<'a> {
                     None => break,
                 }
             }
+            // Stuck just outside the faces around: a gap of the P1 image where it folds at a
+            // slit tip. The nearest point of this face keeps the curve continuous; a search of
+            // the whole strip could pick a face on the far side of the fold.
+            if m > -Self::FOLD_GAP {
+                let (s, c) = num::sin_cos(theta);
+                return Some(self.lifted(
+                    DVec2::new(rho * c, rho * s),
+                    f,
+                    self.surface.triangles[f],
+                    clamp_barycentric(bary),
+                ));
+            }
         }
         self.polar(rho, theta)
     }
 
-    /// The point lifted through the pole face when it lies in it (or, with `clamp`, when the
-    /// pole face is the only candidate left: barycentrics clamped).
-    fn in_pole_face(&self, w: DVec2, clamp: bool) -> Option<Lifted> {
-        if !clamp && !(w.length() <= self.pole_reach * (1.0 + 1e-9) + 1e-12) {
-            return None; // the common case, most queries are far from the pole
-        }
-        let mut best: Option<(f64, usize, [f64; 3])> = None;
-        for &(f, c) in &self.pole_faces {
-            let b = barycentric(c[0], c[1], c[2], w);
-            let m = b[0].min(b[1]).min(b[2]);
-            if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
-                best = Some((m, f, b));
+    /// Walks from face `from` across the edge the query lies beyond (the corner with the most
+    /// negative barycentric coordinate, `score` giving them) until a face contains it. Unlike
+    /// the walk over neighbours by score, it crosses needles (a face 2 µm wide has barycentric
+    /// coordinates of ±60 a hair outside it; sliver_mesh's columns stopped that walk). `None`
+    /// when it leaves the surface, meets a face without a strip image or goes round in circles.
+    fn edge_walk(&self, from: usize, score: &dyn Fn(usize) -> (f64, [f64; 3])) -> Option<(usize, [f64; 3])> {
+        let mut f = from;
+        let mut previous = usize::MAX;
+        for _ in 0..64 {
+            let (m, bary) = score(f);
+            if m >= -1e-9 {
+                return Some((f, bary));
             }
+            if !m.is_finite() {
+                return None;
+            }
+            let t = self.surface.triangles[f];
+            // Corners by increasing coordinate: cross the edge opposite the most negative one
+            // whose neighbour is not where we came from.
+            let mut order = [0usize, 1, 2];
+            order.sort_by(|&a, &b| bary[a].total_cmp(&bary[b]));
+            let next = order
+                .iter()
+                .take_while(|&&k| bary[k] < 0.0)
+                .filter_map(|&k| self.across(f, t[(k + 1) % 3], t[(k + 2) % 3]))
+                .find(|&g| g != previous)?;
+            (previous, f) = (f, next);
         }
-        let (m, f, b) = best?;
-        if m >= -1e-12 {
-            return Some(self.lifted(w, f, self.surface.triangles[f], b));
-        }
-        if !clamp || m < -0.5 {
-            return None;
-        }
-        Some(self.lifted(w, f, self.surface.triangles[f], clamp_barycentric(b)))
+        None
+    }
+
+    /// The face other than `f` on edge `a`–`b`.
+    fn across(&self, f: usize, a: u32, b: u32) -> Option<usize> {
+        let (s, e) = (self.vertex_start[a as usize] as usize, self.vertex_start[a as usize + 1] as usize);
+        self.vertex_faces[s..e].iter().map(|&g| g as usize).find(|&g| g != f && self.surface.triangles[g].contains(&b))
+    }
+
+    /// The point lifted through the pole star when it lies in it (or, with `clamp`, the nearest
+    /// point of the star: the strip located nothing).
+    fn in_star(&self, rho: f64, theta: f64, clamp: bool) -> Option<Lifted> {
+        let star = self.star.as_ref()?;
+        let (face, bary) = star.locate(rho, theta, clamp)?;
+        let (s, c) = num::sin_cos(theta);
+        Some(self.lifted(DVec2::new(rho * c, rho * s), face, self.surface.triangles[face], bary))
     }
 
     fn lifted(&self, w: DVec2, face: usize, vertices: [u32; 3], bary: [f64; 3]) -> Lifted {
@@ -190,6 +235,159 @@ impl<'a> Lift<'a> {
         let n = if n == DVec3::ZERO { s.face_normals[face] } else { n };
         Lifted { w, p, n, face: face as u32 }
     }
+}
+
+/// A fold thinner than this on the surface (mm) is stepped across by a curve, not avoided: the
+/// step is no longer than the fold is thin.
+const FOLD_THIN_MM: f64 = 0.1;
+
+/// A face outside the pole star spanning more angle than this (radians) in the strip grows it.
+const WIDE_FACE_RAD: f64 = 0.5;
+
+/// The pole star grows by at most this many rings of faces.
+const MAX_STAR_RINGS: usize = 6;
+
+/// The faces of a disk map around its pole, where the log-polar strip degenerates (the pole
+/// face's image is not a triangle, its neighbours' images may fold). They are lifted through
+/// the w plane instead, but not as they stand: their union's rim is a polygon of chords there,
+/// while the strip faces outside it end on the same edges drawn straight in the strip, and the
+/// two would leave gaps and overlaps (a ring crossing the rim jumped 2 mm on a 2.5 mm grid). So
+/// a query is first moved along its ray: the point at fraction s of the rim's strip radius in
+/// its direction goes to fraction s of the rim chord's point with the same edge parameter. The
+/// lift is then continuous across the rim and one-to-one inside (the rim is star-shaped about
+/// the pole, checked on construction).
+#[derive(Debug, Clone)]
+struct PoleStar {
+    /// Its faces with their w-plane corners.
+    faces: Vec<(usize, [DVec2; 3])>,
+    /// Its rim edges, counter-clockwise about the pole: (start angle, angular span in (0, π),
+    /// start corner, end corner) with the corners in the w plane.
+    rim: Vec<(f64, f64, DVec2, DVec2)>,
+    /// Largest |w| on the rim: a point farther out is outside.
+    reach: f64,
+}
+
+impl PoleStar {
+    /// The pole face grown ring by ring (faces sharing a vertex) until no face just outside it
+    /// is wide in the strip (spans more than [`WIDE_FACE_RAD`] of angle, or is folded), keeping
+    /// the last growth whose rim is star-shaped about the pole. It may reach a boundary: then
+    /// its rim runs along the loop's chords on one side only (two sides of a slit would wind
+    /// back and fail the check), and the warp sends the strip's straight slit onto them.
+    fn new(
+        map: &SlitMap,
+        pole_face: usize,
+        corners: &[[DVec2; 3]],
+        vertex_start: &[u32],
+        vertex_faces: &[u32],
+    ) -> Self {
+        let tris = map.triangles();
+        let grow = |faces: &[usize]| {
+            let mut out: Vec<usize> = faces.to_vec();
+            for &f in faces {
+                for &v in &tris[f] {
+                    let (a, b) = (vertex_start[v as usize] as usize, vertex_start[v as usize + 1] as usize);
+                    out.extend(vertex_faces[a..b].iter().map(|&g| g as usize));
+                }
+            }
+            out.sort_unstable();
+            out.dedup();
+            out
+        };
+        let wide = |f: usize| {
+            let c = &corners[f];
+            let span = c[0].x.max(c[1].x).max(c[2].x) - c[0].x.min(c[1].x).min(c[2].x);
+            span > WIDE_FACE_RAD || (c[1] - c[0]).perp_dot(c[2] - c[0]) >= 0.0
+        };
+        let mut faces = vec![pole_face];
+        let mut best = Self::of(map, faces.clone());
+        for _ in 0..MAX_STAR_RINGS {
+            faces = grow(&faces);
+            if let Some(star) = Self::of(map, faces.clone()) {
+                best = Some(star);
+                if !grow(&faces).iter().any(|&g| faces.binary_search(&g).is_err() && wide(g)) {
+                    break;
+                }
+            }
+        }
+        best.unwrap_or_else(|| {
+            // The pole outside its own face's image (rounding): no rim, plain w-plane location.
+            let faces = vec![(pole_face, tris[pole_face].map(|v| map.w[v as usize]))];
+            let reach = faces[0].1.iter().map(|w| w.length()).fold(0.0, f64::max);
+            Self { faces, rim: Vec::new(), reach }
+        })
+    }
+
+    fn of(map: &SlitMap, faces: Vec<usize>) -> Option<Self> {
+        let tris = map.triangles();
+        let mut edges: Vec<(u32, u32)> =
+            faces.iter().flat_map(|&f| (0..3).map(move |k| (tris[f][k], tris[f][(k + 1) % 3]))).collect();
+        edges.sort_unstable();
+        // A rim edge is one whose reverse is not an edge of the star.
+        let rim_edges: Vec<(u32, u32)> =
+            edges.iter().copied().filter(|&(a, b)| edges.binary_search(&(b, a)).is_err()).collect();
+        let mut rim = Vec::with_capacity(rim_edges.len());
+        for (a, b) in rim_edges {
+            let (wa, wb) = (map.w[a as usize], map.w[b as usize]);
+            let (ta, tb) = (num::arg(wa), num::arg(wb));
+            let span = (tb - ta).rem_euclid(TAU);
+            if !(span > 1e-12 && span < PI && wa.perp_dot(wb) > 0.0) {
+                return None;
+            }
+            rim.push((ta, span, wa, wb));
+        }
+        let total: f64 = rim.iter().map(|e| e.1).sum();
+        if (total - TAU).abs() > 1e-9 {
+            return None; // winds more than once, or leaves gaps: not star-shaped
+        }
+        rim.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let faces = faces.into_iter().map(|f| (f, tris[f].map(|v| map.w[v as usize]))).collect();
+        let reach = rim.iter().map(|e| e.2.length()).fold(0.0, f64::max);
+        Some(Self { faces, rim, reach })
+    }
+
+    /// Face and barycentric coordinates of the point `rho · e^{iθ}` when it lies in the star
+    /// (with `clamp`, up to half as far again outside it, pulled onto the rim).
+    fn locate(&self, rho: f64, theta: f64, clamp: bool) -> Option<(usize, [f64; 3])> {
+        let limit = if clamp { 1.5 } else { 1.0 + 1e-12 };
+        if !(rho <= self.reach * limit) {
+            return None;
+        }
+        let (sin, cos) = num::sin_cos(theta);
+        let q = if self.rim.is_empty() {
+            DVec2::new(rho * cos, rho * sin)
+        } else {
+            let &(ta, span, wa, wb) =
+                self.rim.iter().find(|e| (theta - e.0).rem_euclid(TAU) < e.1).unwrap_or_else(|| {
+                    self.rim.iter().min_by(|x, y| gap(theta, x).total_cmp(&gap(theta, y))).expect("a rim")
+                });
+            let t = ((theta - ta).rem_euclid(TAU) / span).min(1.0);
+            let rim_rho = wa.length() + t * (wb.length() - wa.length());
+            let s = rho / rim_rho;
+            if !(s <= limit) {
+                return None;
+            }
+            (wa + t * (wb - wa)) * s.min(1.0)
+        };
+        let mut best: Option<(f64, usize, [f64; 3])> = None;
+        for &(f, c) in &self.faces {
+            let b = barycentric(c[0], c[1], c[2], q);
+            let m = b[0].min(b[1]).min(b[2]);
+            if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
+                best = Some((m, f, b));
+            }
+        }
+        let (m, f, b) = best?;
+        if self.rim.is_empty() && m < if clamp { -0.5 } else { -1e-12 } {
+            return None;
+        }
+        Some((f, if m >= 0.0 { b } else { clamp_barycentric(b) }))
+    }
+}
+
+/// Angle from the end of rim edge `e` round to `theta` (rounding can leave `theta` just past
+/// the last edge).
+fn gap(theta: f64, e: &(f64, f64, DVec2, DVec2)) -> f64 {
+    ((theta - e.0).rem_euclid(TAU) - e.1).abs()
 }
 
 /// Point location in the log-polar strip. The faces crowd towards some radii (a ring band can
@@ -271,6 +469,86 @@ impl StripIndex {
             if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
                 *best = Some((m, f as usize, bary));
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flatten::{self, FlattenInput, FlattenOptions};
+    use crate::mesh::{self, MeshOptions};
+    use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
+
+    /// The planner's surface of a fixture and its slit map at the centroid pole.
+    fn mapped(name: &str) -> (Surface, SlitMap) {
+        let part = crate::fixtures::by_name(name).expect("a fixture");
+        let surface = mesh::from_triangles(&part, &MeshOptions::default()).expect("a valid fixture").surface;
+        let surface = crate::plan::planning_surface(&surface);
+        let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default()).expect("flattened");
+        let domain = PlanarDomain::of_surface(&surface, flat.uv);
+        let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).expect("factorised");
+        let map = solver.map(crate::origin::centroid_pole(&domain)).expect("mapped");
+        (surface, map)
+    }
+
+    /// Lifts the circle |w| = rho at `n` angles, each from the previous point's face, and returns
+    /// the largest step on the surface, mm.
+    fn largest_step(lift: &Lift<'_>, rho: f64, n: usize) -> f64 {
+        let mut previous: Option<Lifted> = None;
+        let mut largest: f64 = 0.0;
+        for k in 0..=n {
+            let theta = TAU * k as f64 / n as f64;
+            let l = match previous {
+                Some(p) => lift.polar_near(rho, theta, p.face),
+                None => lift.polar(rho, theta),
+            }
+            .expect("on the surface");
+            if let Some(p) = previous {
+                largest = largest.max(p.p.distance(l.p));
+            }
+            previous = Some(l);
+        }
+        largest
+    }
+
+    #[test]
+    fn issue_4_circles_round_the_pole_lift_continuously_across_the_star_rim() {
+        // box_boss_pocket's top is a flat 2.5 mm grid: the faces around the pole were lifted
+        // through the w plane and their neighbours through the strip, and a ring crossing from
+        // one to the other jumped 2.1 mm.
+        let (surface, map) = mapped("box_boss_pocket");
+        let lift = Lift::new(&surface, &map);
+        let star = lift.star.as_ref().expect("a disk map has a pole star");
+        assert!(star.faces.len() > 1 && !star.rim.is_empty(), "{} faces", star.faces.len());
+        let total: f64 = star.rim.iter().map(|e| e.1).sum();
+        assert!((total - TAU).abs() < 1e-9, "the rim winds once about the pole: {total}");
+        let n = 20_000;
+        for k in 1..=24 {
+            let rho = star.reach * k as f64 / 12.0;
+            // A circle of radius rho on the surface is about rho / |w'| long; a step is the
+            // arc over n, so a few hundredths of a millimetre; a jump is a face size.
+            let step = largest_step(&lift, rho, n);
+            assert!(step < 0.1, "radius {rho}: a step of {step} mm");
+        }
+    }
+
+    #[test]
+    fn the_star_lift_agrees_with_the_map_on_its_rim() {
+        // The warp is the identity on the rim (where the strip faces outside meet it): every
+        // rim corner, and every rim edge's midpoint as the strip draws it, lifts to itself.
+        let (surface, map) = mapped("plate_3_holes");
+        let lift = Lift::new(&surface, &map);
+        let star = lift.star.as_ref().expect("a pole star");
+        let vertex_of = |w: DVec2| (0..map.w.len()).find(|&v| map.w[v] == w).expect("a rim corner");
+        for &(ta, span, wa, wb) in &star.rim {
+            let (a, b) = (vertex_of(wa), vertex_of(wb));
+            let l = lift.at(wa).expect("lifted");
+            assert!(l.p.distance(surface.positions[a]) < 1e-9, "corner {a}");
+            let mid_rho = 0.5 * (wa.length() + wb.length());
+            let l = lift.polar(mid_rho * (1.0 - 1e-12), ta + 0.5 * span).expect("lifted");
+            let expected = 0.5 * (surface.positions[a] + surface.positions[b]);
+            assert!(l.p.distance(expected) < 1e-6, "edge {a}–{b}: {:?} vs {expected:?}", l.p);
         }
     }
 }
