@@ -13,9 +13,10 @@
 //! each split adds one face to that vertex's fan. Faces with one, two or three split edges are
 //! cut into two, three or four (a conforming red–green split), so the mesh stays manifold.
 //!
-//! Long edges: first every edge longer than a fraction of the part's size is split, so that no
-//! face spans a large part of the slit domain, where its straight image could not follow the map
-//! (see [`RefineOptions::max_edge_fraction`]).
+//! Long edges: first faces with an edge longer than a fraction of the part's size are bisected
+//! through their longest edges until none is left, so that no face spans a large part of the
+//! slit domain, where its straight image could not follow the map (see
+//! [`RefineOptions::max_edge_fraction`]).
 //!
 //! Ears: a face with all three corners on the boundary (typically the triangle at a corner of the
 //! outer loop) has its whole image on |w| = 1 (or on a slit) in the log-polar strip the later
@@ -96,17 +97,38 @@ pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
     s
 }
 
-/// The edges longer than `max_len`, sorted.
+/// The edges to split in one round of long-edge refinement, sorted: the longest edge of every
+/// face whose longest edge exceeds `max_len`, closed so that every face with a split edge has
+/// its longest edge split too. A face is then cut through its longest edge (bisected, or cut
+/// in three or four), which keeps its angles away from zero (Rivara's longest-edge
+/// bisection); splitting any edge over the length made needles of CAD fans and folded the
+/// slit map (featuretype: 13 folded faces at the centroid pole became 243).
 fn long_edges(s: &Surface, max_len: f64) -> Vec<Edge> {
-    let mut edges: Vec<Edge> = s
+    let len = |(a, b): Edge| s.positions[a as usize].distance(s.positions[b as usize]);
+    let longest: Vec<Edge> = s
         .triangles
         .iter()
-        .flat_map(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
-        .filter(|&(a, b)| s.positions[a as usize].distance(s.positions[b as usize]) > max_len)
+        .map(|t| {
+            let edges = [0, 1, 2].map(|k| key(t[k], t[(k + 1) % 3]));
+            // Ties broken by the vertex numbers, so the choice is deterministic.
+            edges.into_iter().max_by(|&x, &y| len(x).total_cmp(&len(y)).then(x.cmp(&y))).unwrap_or_default()
+        })
         .collect();
-    edges.sort_unstable();
-    edges.dedup();
-    edges
+    let mut split: std::collections::BTreeSet<Edge> = longest.iter().copied().filter(|&e| len(e) > max_len).collect();
+    if split.is_empty() {
+        return Vec::new();
+    }
+    loop {
+        let before = split.len();
+        for (t, &l) in s.triangles.iter().zip(&longest) {
+            if !split.contains(&l) && (0..3).any(|k| split.contains(&key(t[k], t[(k + 1) % 3]))) {
+                split.insert(l);
+            }
+        }
+        if split.len() == before {
+            return split.into_iter().collect();
+        }
+    }
 }
 
 /// The interior edges of the faces whose three corners are all on the boundary, sorted.

@@ -24,6 +24,17 @@ pub struct Energy {
     /// a bin no face reaches.
     pub slopes: Vec<f64>,
     pub mode: Mode,
+    /// Faces the slit map folds over (P1 cannot resolve the map there, see
+    /// [`SlitMap::flipped_faces`]): a pole with fewer wins before E_min is compared.
+    pub flipped: usize,
+}
+
+impl Energy {
+    /// Whether this pole is better than one with energy `other`: fewer folded faces, then a
+    /// smaller E_min.
+    pub fn better_than(&self, other: &Energy) -> bool {
+        (self.flipped, self.e_min) < (other.flipped, other.e_min)
+    }
 }
 
 /// Per-face precomputations of the energy (3D gradient operators, areas, curvature tensors), so
@@ -156,6 +167,7 @@ impl<'a> EnergyEvaluator<'a> {
             gouge_faces,
             slopes,
             mode: map.mode,
+            flipped: map.flipped_triangles(),
         })
     }
 

@@ -85,7 +85,7 @@ impl<'s, 'a> Search<'s, 'a> {
         let energy = self.ev.evaluate(p).ok()?;
         let e = energy.e_min;
         self.trace.push((p, e));
-        if self.best.as_ref().map_or(true, |(_, b)| e < b.e_min) {
+        if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
             self.best = Some((p, energy));
         }
         Some(e)
@@ -95,7 +95,7 @@ impl<'s, 'a> Search<'s, 'a> {
     pub fn record(&mut self, p: DVec2, energy: Energy) {
         self.evaluations += 1;
         self.trace.push((p, energy.e_min));
-        if self.best.as_ref().map_or(true, |(_, b)| energy.e_min < b.e_min) {
+        if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
             self.best = Some((p, energy));
         }
     }

@@ -56,32 +56,6 @@ impl<'a> Lift<'a> {
         Self { surface, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
     }
 
-    /// Faces whose log-polar image is folded over (P1 folds at slit tips: the strip straightens
-    /// the slit, and a face reaching round its tip turns over), the pole star's aside, and that
-    /// lie along the rings (wider in angle, as arc length, than in radius): a ring running
-    /// through one would jump across the face. A fold standing across the rings (needles, like
-    /// sliver_mesh's 2 µm columns) is only crossed, over its width: those are left out, their
-    /// radius range would only push rings apart for nothing.
-    pub fn folded_faces(&self) -> Vec<usize> {
-        // (arg w, |w|) reverses orientation: a face counter-clockwise on the surface has a
-        // negative signed area in the strip.
-        let area = |c: &[DVec2; 3]| (c[1] - c[0]).perp_dot(c[2] - c[0]);
-        (0..self.corners.len())
-            .filter(|&f| {
-                let c = &self.corners[f];
-                let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
-                area(c) >= 0.0 && (hi.x - lo.x) * hi.y >= hi.y - lo.y && self.min_altitude_mm(f) > FOLD_THIN_MM
-            })
-            .collect()
-    }
-
-    /// The smallest altitude of face `f` on the surface, mm.
-    fn min_altitude_mm(&self, f: usize) -> f64 {
-        let [a, b, c] = self.surface.triangles[f].map(|v| self.surface.positions[v as usize]);
-        let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
-        2.0 * self.surface.face_areas[f] / longest.max(f64::MIN_POSITIVE)
-    }
-
     /// The surface point whose image is `w`.
     pub fn at(&self, w: DVec2) -> Option<Lifted> {
         self.polar(w.length(), num::arg(w))
@@ -236,10 +210,6 @@ impl<'a> Lift<'a> {
         Lifted { w, p, n, face: face as u32 }
     }
 }
-
-/// A fold thinner than this on the surface (mm) is stepped across by a curve, not avoided: the
-/// step is no longer than the fold is thin.
-const FOLD_THIN_MM: f64 = 0.1;
 
 /// A face outside the pole star spanning more angle than this (radians) in the strip grows it.
 const WIDE_FACE_RAD: f64 = 0.5;

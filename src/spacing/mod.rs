@@ -294,10 +294,8 @@ impl<'a> Spacer<'a> {
             Mode::Disk => 0.0,
             Mode::Annulus { inner_radius, .. } => inner_radius,
         };
-        let lift = Lift::new(surface, map);
-        let mut folded = map.flipped_faces();
-        folded.extend(lift.folded_faces());
-        let mut forbidden: Vec<(f64, f64)> = folded
+        let mut forbidden: Vec<(f64, f64)> = map
+            .flipped_faces()
             .into_iter()
             .map(|f| {
                 let r = map.triangles()[f].map(|v| map.w[v as usize].length());
@@ -315,7 +313,7 @@ impl<'a> Spacer<'a> {
             }
         }
         Self {
-            lift,
+            lift: Lift::new(surface, map),
             corners: corner_angles(surface, map),
             forbidden: merged,
             slits,
