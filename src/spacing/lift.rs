@@ -88,16 +88,13 @@ impl<'a> Lift<'a> {
         Some(self.lifted(DVec2::new(rho * cos, rho * sin), face, self.surface.triangles[face], bary))
     }
 
-    /// Smallest barycentric coordinate down to which a stuck walk keeps its face (see
-    /// [`Lift::polar_near`]).
-    const FOLD_GAP: f64 = 0.25;
-
     /// Like [`Lift::polar`], but found by walking from face `near` (the previous point's face)
     /// towards the face containing the point: first across edges ([`Lift::edge_walk`]), then
     /// over faces that share a vertex, by score. Consecutive points of a curve then stay on
     /// neighbouring faces even where the P1 image folds over itself (slit tips): the lifted
-    /// curve is continuous there instead of jumping to an overlapping face elsewhere. Stuck
-    /// just outside a face, the face's nearest point; farther out, [`Lift::polar`].
+    /// curve is continuous there instead of jumping to an overlapping face elsewhere. When both
+    /// walks get stuck, [`Lift::polar`] (keeping the stuck face's nearest point instead made a
+    /// 1 mm jump on plate_holes, where the walk was stopped by the pole star).
     pub fn polar_near(&self, rho: f64, theta: f64, near: u32) -> Option<Lifted> {
         if self.in_star(rho, theta, false).is_none() {
             let x = (theta + PI).rem_euclid(TAU) - PI;
@@ -134,18 +131,6 @@ impl<'a> Lift<'a> {
                     Some((g, mg, bg)) => (f, m, bary) = (g, mg, bg),
                     None => break,
                 }
-            }
-            // Stuck just outside the faces around: a gap of the P1 image where it folds at a
-            // slit tip. The nearest point of this face keeps the curve continuous; a search of
-            // the whole strip could pick a face on the far side of the fold.
-            if m > -Self::FOLD_GAP {
-                let (s, c) = num::sin_cos(theta);
-                return Some(self.lifted(
-                    DVec2::new(rho * c, rho * s),
-                    f,
-                    self.surface.triangles[f],
-                    clamp_barycentric(bary),
-                ));
             }
         }
         self.polar(rho, theta)
@@ -240,9 +225,10 @@ struct PoleStar {
 impl PoleStar {
     /// The pole face grown ring by ring (faces sharing a vertex) until no face just outside it
     /// is wide in the strip (spans more than [`WIDE_FACE_RAD`] of angle, or is folded), keeping
-    /// the last growth whose rim is star-shaped about the pole. It may reach a boundary: then
-    /// its rim runs along the loop's chords on one side only (two sides of a slit would wind
-    /// back and fail the check), and the warp sends the strip's straight slit onto them.
+    /// the last growth whose rim is star-shaped about the pole. It may reach a boundary, not
+    /// cross the nearest slit's radius: its rim runs along the loop's chords on the near side
+    /// only, and the warp sends the strip's straight slit onto them (plate_holes' centroid pole
+    /// lies inside a slit of radius 0.05, and the faces around it reached round that hole).
     fn new(
         map: &SlitMap,
         pole_face: usize,
@@ -251,12 +237,15 @@ impl PoleStar {
         vertex_faces: &[u32],
     ) -> Self {
         let tris = map.triangles();
+        // Never past the nearest slit: faces beyond it would wrap round the hole.
+        let cap = map.slits.iter().map(|s| s.radius).fold(1.0, f64::min) * (1.0 + 1e-9);
+        let below_cap = |g: usize| tris[g].iter().all(|&v| map.w[v as usize].length() <= cap);
         let grow = |faces: &[usize]| {
             let mut out: Vec<usize> = faces.to_vec();
             for &f in faces {
                 for &v in &tris[f] {
                     let (a, b) = (vertex_start[v as usize] as usize, vertex_start[v as usize + 1] as usize);
-                    out.extend(vertex_faces[a..b].iter().map(|&g| g as usize));
+                    out.extend(vertex_faces[a..b].iter().map(|&g| g as usize).filter(|&g| below_cap(g)));
                 }
             }
             out.sort_unstable();
