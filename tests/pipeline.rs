@@ -177,3 +177,26 @@ fn a_smaller_scallop_gives_more_rings_and_bad_options_are_refused() {
         assert!(matches!(e, Err(slitpath::plan::PlanError::InvalidOption(_))), "R {r} h {h}: {:?}", e.err());
     }
 }
+
+#[test]
+fn issue_4_fixtures_without_holes_keep_the_scallop_at_their_scale() {
+    // The analytic disks are 2 mm across: a 0.05 mm ball and h = 0.5 µm. The spiral's chords
+    // sagged 2 µm inside the rings (a fixed chord tolerance) and left 1.48 h at the unit disk's rim.
+    for name in ["unit_disk", "concentric_annulus", "eccentric_annulus"] {
+        let p = planner(name);
+        let options =
+            PlanOptions { radius_mm: 0.05, scallop_mm: 5e-4, verify_samples: 40_000, ..PlanOptions::default() };
+        let pl = plan(&p, &options);
+        let v = pl.verification().expect("verified");
+        let h = options.scallop_mm;
+        println!(
+            "{name}: rings {} max {:.3} h, uncovered {}",
+            pl.rings.rings.len(),
+            v.max_scallop_mm / h,
+            v.uncovered_samples
+        );
+        assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
+        assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
+        assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
+    }
+}
