@@ -421,6 +421,10 @@ pub struct PlanReport {
     pub rings: usize,
     /// Ring radii |w|, outermost first.
     pub ring_radii: Vec<f64>,
+    /// Rings the spacing could not prove everywhere (see [`Rings::fold_compromises`] and
+    /// [`Rings::crease_compromises`]): where the verifier's figures may exceed h, and why.
+    pub fold_compromises: usize,
+    pub crease_compromises: usize,
     pub path: PathSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verify: Option<Verification>,
@@ -462,6 +466,8 @@ impl PlanReport {
             },
             rings: rings.rings.len(),
             ring_radii: rings.radii(),
+            fold_compromises: rings.fold_compromises,
+            crease_compromises: rings.crease_compromises,
             path,
             verify: verification,
             gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,

@@ -40,7 +40,7 @@ pub use lift::{Lift, Lifted};
 
 use crate::mesh::Surface;
 use crate::slitmap::{Mode, SlitMap};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::f64::consts::{PI, TAU};
 
@@ -119,6 +119,9 @@ pub struct Rings {
     /// Rings moved below a P1 fold at a slit tip although the band above was not proven cut
     /// there (the alternative, a ring through the fold, could jump across the hole).
     pub fold_compromises: usize,
+    /// Bands spaced without their crease tests: no ring passed them (a concave crease sharper
+    /// than the ball, where the surface itself leaves more than h).
+    pub crease_compromises: usize,
 }
 
 impl Rings {
@@ -224,6 +227,9 @@ struct Spacer<'a> {
     meridian_mm: f64,
     /// arg w and |w| of the corners of the outer loop (and of the annulus' inner loop).
     corners: Vec<(f64, f64)>,
+    /// Creases (see [`creases`]) in the log-polar strip: (arg w, |w|) of their ends, the angle
+    /// of the second within π of the first.
+    creases: Vec<(DVec2, DVec2)>,
     /// Radial intervals no ring may run in: the radius ranges of flipped image triangles (P1
     /// folds at slit tips), where the inverse map is not one-to-one and a ring would jump.
     forbidden: Vec<(f64, f64)>,
@@ -231,6 +237,9 @@ struct Spacer<'a> {
     trials: usize,
     meridians: usize,
     fold_compromises: usize,
+    crease_compromises: usize,
+    /// Whether bands get crease meridians (off while a band is retried without them).
+    creases_on: bool,
     /// arg w of the meridians that decided the last ring (see [`Spacer::next_radius`]).
     binding: Vec<f64>,
 }
@@ -261,13 +270,52 @@ fn corner_angles(surface: &Surface, map: &SlitMap) -> Vec<(f64, f64)> {
     out
 }
 
+/// An interior edge whose faces turn by more than this (in 3D) is a crease.
+const CREASE_TURN: f64 = 3.0 * PI / 180.0;
+
+/// Radii of a band at which the rings' crossings with each crease are tested (fractions of the
+/// expected band width below ring k).
+const CREASE_DEPTHS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
+
+/// The creases of a faceted surface in the log-polar strip: interior edges whose two faces turn
+/// by more than [`CREASE_TURN`]. The scallop changes abruptly across a crease (the facets meet
+/// the ball there, not the interpolated normals), and wavy_mesh_with_hole's worst samples all
+/// lay on its 10–14° creases, between meridians.
+fn creases(surface: &Surface, map: &SlitMap) -> Vec<(DVec2, DVec2)> {
+    let mut edges: Vec<(u32, u32, usize)> = surface
+        .triangles
+        .iter()
+        .enumerate()
+        .flat_map(|(f, t)| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]), f)))
+        .collect();
+    edges.sort_unstable();
+    let strip = |v: u32| {
+        let w = map.w[v as usize];
+        DVec2::new(crate::num::atan2(w.y, w.x), w.length())
+    };
+    let cos_turn = crate::num::cos(CREASE_TURN);
+    edges
+        .windows(2)
+        .filter(|e| (e[0].0, e[0].1) == (e[1].0, e[1].1))
+        .filter(|e| surface.face_normals[e[0].2].dot(surface.face_normals[e[1].2]) < cos_turn)
+        .map(|e| {
+            let (a, mut b) = (strip(e[0].0), strip(e[0].1));
+            b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
+            (a, b)
+        })
+        .collect()
+}
+
 /// The band above a candidate ring: the meridians tested and ring k's centres near each.
 struct Band {
     /// Radius of ring k (1 for the outer boundary).
     hi: f64,
     thetas: Vec<f64>,
-    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip.
+    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip or crosses a crease (tested
+    /// point by point).
     near_tip: Vec<bool>,
+    /// Whether each meridian crosses a crease (tested point by point).
+    on_crease: Vec<bool>,
     /// Ring k's chain per meridian; `None` for the first ring (nothing cut above it).
     upper: Option<Vec<Chain>>,
     /// Index of the meridian that failed last: tested first next time.
@@ -315,6 +363,7 @@ impl<'a> Spacer<'a> {
         Self {
             lift: Lift::new(surface, map),
             corners: corner_angles(surface, map),
+            creases: creases(surface, map),
             forbidden: merged,
             slits,
             mode: map.mode,
@@ -326,6 +375,8 @@ impl<'a> Spacer<'a> {
             trials: 0,
             meridians: 0,
             fold_compromises: 0,
+            crease_compromises: 0,
+            creases_on: true,
             binding: Vec::new(),
         }
     }
@@ -335,7 +386,7 @@ impl<'a> Spacer<'a> {
         let mut last_step: Option<f64> = None;
         loop {
             let hi = rings.last().map_or(1.0, |r| r.radius);
-            let (mut band, hi_length) = self.band(hi, rings.is_empty())?;
+            let (mut band, hi_length) = self.band(hi, rings.is_empty(), last_step)?;
             if let Some(last) = rings.last_mut() {
                 last.length_mm = hi_length;
             }
@@ -349,7 +400,18 @@ impl<'a> Spacer<'a> {
                 }
                 break;
             }
-            let radius = self.next_radius(&mut band, last_step)?;
+            let mut radius = self.next_radius(&mut band, last_step)?;
+            if !(hi - radius > 1e-12) && band.on_crease.contains(&true) {
+                // A concave crease sharper than the ball leaves more than h whatever the rings
+                // (the surface makes it impossible): reported, and this band spaced without its
+                // crease meridians.
+                self.crease_compromises += 1;
+                self.creases_on = false;
+                let retry = self.band(hi, rings.is_empty(), last_step);
+                self.creases_on = true;
+                band = retry?.0;
+                radius = self.next_radius(&mut band, last_step)?;
+            }
             if !(hi - radius > 1e-12) {
                 return Err(SpacingError::NoProgress { ring: rings.len() + 1, radius: hi });
             }
@@ -367,6 +429,7 @@ impl<'a> Spacer<'a> {
             meridians: self.meridians,
             trials: self.trials,
             fold_compromises: self.fold_compromises,
+            crease_compromises: self.crease_compromises,
         })
     }
 
@@ -431,7 +494,7 @@ impl<'a> Spacer<'a> {
 
     /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip) and
     /// ring k's centre chains on them; also the ring's length.
-    fn band(&mut self, hi: f64, first: bool) -> Result<(Band, f64), SpacingError> {
+    fn band(&mut self, hi: f64, first: bool, last_step: Option<f64>) -> Result<(Band, f64), SpacingError> {
         let (length, cumulative) = self.ring_length(hi)?;
         let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
         let mut thetas: Vec<f64> = Vec::with_capacity(n + 6 * self.slits.len());
@@ -464,6 +527,31 @@ impl<'a> Spacer<'a> {
                 thetas.push((c - d).rem_euclid(TAU));
             }
         }
+        // Where the band's rings cross a crease (the next ring is expected at most about two
+        // last steps below this one). The scallop along those meridians has a kink at the
+        // crease: they are tested point by point too.
+        let depth = last_step.map_or(0.05, |s| 2.0 * s).min(hi - self.r_min);
+        let mut on_crease: Vec<f64> = Vec::new();
+        for &(a, b) in self.creases.iter().filter(|_| self.creases_on) {
+            let (lo_r, hi_r) = (a.y.min(b.y), a.y.max(b.y));
+            if lo_r > hi || hi_r < hi - depth {
+                continue;
+            }
+            if hi_r - lo_r <= 1e-12 {
+                // Along the rings: its ends and middle.
+                on_crease.extend([a.x, 0.5 * (a.x + b.x), b.x].map(|t| t.rem_euclid(TAU)));
+                continue;
+            }
+            for f in CREASE_DEPTHS {
+                let r = hi - f * depth;
+                if r >= lo_r && r <= hi_r {
+                    let t = (r - a.y) / (b.y - a.y);
+                    on_crease.push((a.x + t * (b.x - a.x)).rem_euclid(TAU));
+                }
+            }
+        }
+        on_crease.sort_by(f64::total_cmp);
+        thetas.extend_from_slice(&on_crease);
         thetas.sort_by(f64::total_cmp);
         thetas.dedup();
         self.meridians += thetas.len();
@@ -480,6 +568,7 @@ impl<'a> Spacer<'a> {
                 })
             })
             .collect();
+        let on_crease = thetas.iter().map(|t| on_crease.binary_search_by(|x| x.total_cmp(t)).is_ok()).collect();
         // The meridians next to those that decided the ring above most likely decide this one.
         let mut active = Vec::new();
         for &t in &self.binding {
@@ -488,7 +577,7 @@ impl<'a> Spacer<'a> {
         }
         active.sort_unstable();
         active.dedup();
-        Ok((Band { hi, thetas, near_tip, upper, last_fail: 0, active }, length))
+        Ok((Band { hi, thetas, near_tip, on_crease, upper, last_fail: 0, active }, length))
     }
 
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
@@ -626,7 +715,9 @@ impl<'a> Spacer<'a> {
                 Ok(upper[i].distance(up) <= r && lower.distance(down) <= r)
             }
             (Some(upper), None) => {
-                if band.near_tip[i] && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)? {
+                if (band.near_tip[i] || band.on_crease[i])
+                    && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)?
+                {
                     return Ok(false);
                 }
                 self.cusp_ok(&upper[i], &lower, rho, band.hi, theta)

@@ -28,6 +28,12 @@ function rows(plan: PlanResult, limit: number): Row[] {
     ["metric-uncovered", "Uncovered", `${n3.format(100 * verify.uncovered_fraction)} % of samples`, verify.uncovered_fraction > 0],
     ["metric-gouges", "Gouges", n0.format(verify.gouges), verify.gouges > 0],
     ["metric-gouge-risk", "Gouge-risk area", `${n3.format(report.gouge_risk_area_mm2)} mm²`, report.gouge_risk_area_mm2 > 0],
+    [
+      "metric-compromises",
+      "Rings not proven (folds / sharp creases)",
+      `${n0.format(report.fold_compromises)} / ${n0.format(report.crease_compromises)}`,
+      report.fold_compromises + report.crease_compromises > 0,
+    ],
     ["metric-origin", "Origin", `${origin.mode}, pole (${origin.pole_uv.map((v) => n3.format(v)).join(", ")})`],
     ["metric-energy", "E_min (this pole)", `${n3.format(origin.e_min)} (uniformity ${n3.format(origin.uniformity)})`],
     [
