@@ -413,7 +413,8 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, now: &dyn Fn() -> f64) -> 
 
 pub const PLAN_HEADER: &str = "case                       faces holes rings length mm max/h |  read  flat  slit origin spacng spiral  tool verify  post   total (ms)";
 
-/// The analytic parts of the pipeline benchmark, and issue 5's 40k-face part with 6 holes.
+/// The analytic parts of the pipeline benchmark, and issue 5's 40k- and 300k-face parts with 6
+/// holes.
 pub fn plan_cases() -> Vec<(String, TriMesh)> {
     let mut cases: Vec<(String, TriMesh)> =
         ["plate_3_holes", "saddle_2_holes", "spherical_cap_hole", "freeform_4_holes"]
@@ -421,6 +422,8 @@ pub fn plan_cases() -> Vec<(String, TriMesh)> {
             .map(|n| (n.to_string(), fixtures::by_name(n).expect("fixture")))
             .collect();
     cases.push(("panel_6_holes (40k)".into(), fixtures::panel_6_holes(0.75)));
+    // Issue 5's large part: ≤ 15 s in wasm within 1 GiB.
+    cases.push(("panel_6_holes (300k)".into(), fixtures::panel_6_holes(0.275)));
     cases
 }
 

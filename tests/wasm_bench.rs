@@ -4,6 +4,7 @@
 
 use slitpath::bench::{best_mesh, conformal_cases, format_mesh, format_row, mesh_sheet, run_conformal, TABLE_HEADER};
 use slitpath::mesh::stl;
+use wasm_bindgen::JsCast;
 use wasm_bindgen_test::*;
 
 wasm_bindgen_test_configure!(run_in_browser);
@@ -45,4 +46,8 @@ fn whole_pipeline_in_the_browser() {
             Err(e) => console_log!("{name} cannot be planned: {e}"),
         }
     }
+    // Linear memory never shrinks: its size now is the peak over every case (issue 5: ≤ 1 GiB).
+    let memory: js_sys::WebAssembly::Memory = wasm_bindgen::memory().unchecked_into();
+    let bytes = js_sys::ArrayBuffer::from(memory.buffer()).byte_length();
+    console_log!("wasm linear memory after all cases (its peak): {:.0} MiB", bytes as f64 / (1024.0 * 1024.0));
 }
