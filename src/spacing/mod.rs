@@ -311,8 +311,7 @@ struct Band {
     /// Radius of ring k (1 for the outer boundary).
     hi: f64,
     thetas: Vec<f64>,
-    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip or crosses a crease (tested
-    /// point by point).
+    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip (tested point by point).
     near_tip: Vec<bool>,
     /// Whether each meridian crosses a crease (tested point by point).
     on_crease: Vec<bool>,
@@ -492,8 +491,8 @@ impl<'a> Spacer<'a> {
         Ok(ok)
     }
 
-    /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip) and
-    /// ring k's centre chains on them; also the ring's length.
+    /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip, outer
+    /// corner and crease crossing) and ring k's centre chains on them; also the ring's length.
     fn band(&mut self, hi: f64, first: bool, last_step: Option<f64>) -> Result<(Band, f64), SpacingError> {
         let (length, cumulative) = self.ring_length(hi)?;
         let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
