@@ -2,11 +2,12 @@
 //! the invariants of the slit map hold for the centroid pole and for a pole in every hole.
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
 use glam::DVec2;
 use slitpath::flatten::{self, FlattenInput, FlattenOptions};
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::slitmap::{Mode, PlanarDomain, SlitMapOptions, SlitMapSolver};
-use std::path::PathBuf;
 
 const HOLED: &[&str] = &[
     "beetle.stl",
@@ -20,19 +21,9 @@ const HOLED: &[&str] = &[
     "featuretype.stl",
 ];
 
-/// `../shared/meshes` beside the main checkout; a worktree elsewhere uses the machine's copy.
-fn mesh_dir() -> PathBuf {
-    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
-    if beside.is_dir() {
-        beside
-    } else {
-        PathBuf::from("/work/shared/meshes")
-    }
-}
-
 #[test]
 fn slit_map_invariants_on_shared_meshes() {
-    let dir = mesh_dir();
+    let dir = common::shared_mesh_dir();
     for name in HOLED {
         let Ok(bytes) = std::fs::read(dir.join(name)) else {
             eprintln!("skipped: {name} is absent");

@@ -178,33 +178,35 @@ fn a_smaller_scallop_gives_more_rings_and_bad_options_are_refused() {
     }
 }
 
+/// Plans with `options`, prints the verifier's figures and asserts the promise: max scallop
+/// ≤ 1.02 h, uncovered ≤ 0.1 %, one continuous pass.
+fn assert_scallop_kept(name: &str, p: &Planner, options: &PlanOptions) {
+    let pl = plan(p, options);
+    let v = pl.verification().expect("verified");
+    let h = options.scallop_mm;
+    println!(
+        "{name}: rings {} (crease compromises {}), max {:.3} h, p99 {:.3} h, uncovered {}, gouges {} (max {:.2e} mm)",
+        pl.rings.rings.len(),
+        pl.rings.crease_compromises,
+        v.max_scallop_mm / h,
+        v.p99_scallop_mm / h,
+        v.uncovered_samples,
+        v.gouges,
+        v.max_gouge_mm
+    );
+    assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
+    assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
+    assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
+}
+
 #[test]
 fn issue_4_fixtures_without_holes_keep_the_scallop_at_their_scale() {
     // The analytic disks are 2 mm across: a 0.05 mm ball and h = 0.5 µm. The spiral's chords
     // sagged 2 µm inside the rings (a fixed chord tolerance) and left 1.48 h at the unit disk's rim.
+    let options = PlanOptions { radius_mm: 0.05, scallop_mm: 5e-4, verify_samples: 40_000, ..PlanOptions::default() };
     for name in ["unit_disk", "concentric_annulus", "eccentric_annulus"] {
-        let p = planner(name);
-        let options =
-            PlanOptions { radius_mm: 0.05, scallop_mm: 5e-4, verify_samples: 40_000, ..PlanOptions::default() };
-        let pl = plan(&p, &options);
-        let v = pl.verification().expect("verified");
-        let h = options.scallop_mm;
-        println!(
-            "{name}: rings {} max {:.3} h, uncovered {}",
-            pl.rings.rings.len(),
-            v.max_scallop_mm / h,
-            v.uncovered_samples
-        );
-        assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
-        assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
-        assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
+        assert_scallop_kept(name, &planner(name), &options);
     }
-}
-
-/// `../shared/meshes` beside the main checkout; a clone elsewhere uses the machine's copy.
-fn shared_mesh(name: &str) -> Option<Vec<u8>> {
-    let beside = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes").join(name);
-    std::fs::read(beside).or_else(|_| std::fs::read(std::path::Path::new("/work/shared/meshes").join(name))).ok()
 }
 
 #[test]
@@ -213,7 +215,7 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // 5-axis). Their largest scallops sat on creases between facets (10–14° on wavy_mesh_with_hole),
     // between meridians: 1.45 h and 1.32 h before the spacing tested the creases' crossings.
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
-        let Some(bytes) = shared_mesh(name) else {
+        let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
             eprintln!("skipped: {name} is absent");
             continue;
         };
@@ -227,22 +229,6 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
             post: Post::Cl,
             ..PlanOptions::default()
         };
-        let p = Planner::new(out, &|| 0.0).expect("planner");
-        let pl = plan(&p, &options);
-        let v = pl.verification().expect("verified");
-        let h = options.scallop_mm;
-        println!(
-            "{name}: rings {} (crease compromises {}), max {:.3} h, p99 {:.3} h, uncovered {}, gouges {} (max {:.2e} mm)",
-            pl.rings.rings.len(),
-            pl.rings.crease_compromises,
-            v.max_scallop_mm / h,
-            v.p99_scallop_mm / h,
-            v.uncovered_samples,
-            v.gouges,
-            v.max_gouge_mm
-        );
-        assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
-        assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
-        assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
+        assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
     }
 }

@@ -32,7 +32,7 @@
 
 use super::Surface;
 use glam::DVec3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Options of the rim refinement. `Default` gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,7 +115,7 @@ fn long_edges(s: &Surface, max_len: f64) -> Vec<Edge> {
             edges.into_iter().max_by(|&x, &y| len(x).total_cmp(&len(y)).then(x.cmp(&y))).unwrap_or_default()
         })
         .collect();
-    let mut split: std::collections::BTreeSet<Edge> = longest.iter().copied().filter(|&e| len(e) > max_len).collect();
+    let mut split: BTreeSet<Edge> = longest.iter().copied().filter(|&e| len(e) > max_len).collect();
     if split.is_empty() {
         return Vec::new();
     }
@@ -135,7 +135,7 @@ fn long_edges(s: &Surface, max_len: f64) -> Vec<Edge> {
 /// The interior edges of the faces whose three corners are all on the boundary, sorted.
 fn ear_edges(s: &Surface) -> Vec<Edge> {
     let mut on_boundary = vec![false; s.positions.len()];
-    let mut boundary_edges = std::collections::BTreeSet::new();
+    let mut boundary_edges = BTreeSet::new();
     for l in &s.loops {
         for (i, &v) in l.iter().enumerate() {
             on_boundary[v as usize] = true;

@@ -39,9 +39,10 @@
 //! `uniformity ≥ 1` (up to rounding); for `Auto`, the chosen pole folds no more faces than the
 //! centroid and, folding as many, has `energy.e_min ≤ centroid_energy.e_min` (the centroid is
 //! the first start; a pole whose map folds is worse whatever its E_min: the P1 map, and E_min
-//! with it, is wrong there — featuretype's best E_min folded 188 faces and left 84% uncut); `trace` lists every successful evaluation in order and
-//! `evaluations ≤ max_evaluations`; the same input gives the same output bit for bit (no hash
-//! order, transcendental functions from [`crate::num`] only).
+//! with it, is wrong there — featuretype's best E_min folded 188 faces and left 84% uncut);
+//! `trace` lists every successful evaluation in order and `evaluations ≤ max_evaluations`; the
+//! same input gives the same output bit for bit (no hash order, transcendental functions from
+//! [`crate::num`] only).
 
 mod energy;
 mod locate;

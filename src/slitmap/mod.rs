@@ -321,24 +321,26 @@ impl SlitMap {
 
     /// Signed area of every image triangle (positive = orientation preserved).
     pub fn image_signed_areas(&self) -> Vec<f64> {
-        self.triangles
-            .iter()
-            .map(|t| {
-                let (a, b, c) = (self.w[t[0] as usize], self.w[t[1] as usize], self.w[t[2] as usize]);
-                0.5 * (b - a).perp_dot(c - a)
-            })
-            .collect()
+        self.signed_areas().collect()
     }
 
-    /// Number of image triangles with non-positive signed area.
+    fn signed_areas(&self) -> impl Iterator<Item = f64> + '_ {
+        self.triangles.iter().map(|t| {
+            let (a, b, c) = (self.w[t[0] as usize], self.w[t[1] as usize], self.w[t[2] as usize]);
+            0.5 * (b - a).perp_dot(c - a)
+        })
+    }
+
+    /// Number of image triangles with non-positive signed area (no allocation: the origin search
+    /// counts them at every pole).
     pub fn flipped_triangles(&self) -> usize {
-        self.image_signed_areas().iter().filter(|&&a| a <= 0.0).count()
+        self.signed_areas().filter(|&a| a <= 0.0).count()
     }
 
     /// Faces whose image has non-positive signed area (see the module docs for where P1 flips
     /// are expected: slit tips and crowded regions).
     pub fn flipped_faces(&self) -> Vec<usize> {
-        self.image_signed_areas().iter().enumerate().filter(|(_, &a)| a <= 0.0).map(|(f, _)| f).collect()
+        self.signed_areas().enumerate().filter(|&(_, a)| a <= 0.0).map(|(f, _)| f).collect()
     }
 
     /// Log-polar coordinates (seed 000 eq. 7) per triangle corner: `x` = arg w, unwrapped

@@ -84,8 +84,7 @@ impl<'a> Lift<'a> {
                 (f, clamp_barycentric(b))
             }
         };
-        let (sin, cos) = num::sin_cos(theta);
-        Some(self.lifted(DVec2::new(rho * cos, rho * sin), face, self.surface.triangles[face], bary))
+        Some(self.lifted(rho, theta, face, bary))
     }
 
     /// Like [`Lift::polar`], but found by walking from face `near` (the previous point's face)
@@ -107,15 +106,13 @@ impl<'a> Lift<'a> {
                 (if m.is_finite() { m } else { f64::NEG_INFINITY }, bary)
             };
             if let Some((f, bary)) = self.edge_walk(near as usize, &score) {
-                let (s, c) = num::sin_cos(theta);
-                return Some(self.lifted(DVec2::new(rho * c, rho * s), f, self.surface.triangles[f], bary));
+                return Some(self.lifted(rho, theta, f, bary));
             }
             let mut f = near as usize;
             let (mut m, mut bary) = score(f);
             for _ in 0..256 {
                 if m >= -1e-9 {
-                    let (s, c) = num::sin_cos(theta);
-                    return Some(self.lifted(DVec2::new(rho * c, rho * s), f, self.surface.triangles[f], bary));
+                    return Some(self.lifted(rho, theta, f, bary));
                 }
                 let mut next = None;
                 for &v in &self.surface.triangles[f] {
@@ -178,12 +175,13 @@ impl<'a> Lift<'a> {
     fn in_star(&self, rho: f64, theta: f64, clamp: bool) -> Option<Lifted> {
         let star = self.star.as_ref()?;
         let (face, bary) = star.locate(rho, theta, clamp)?;
-        let (s, c) = num::sin_cos(theta);
-        Some(self.lifted(DVec2::new(rho * c, rho * s), face, self.surface.triangles[face], bary))
+        Some(self.lifted(rho, theta, face, bary))
     }
 
-    fn lifted(&self, w: DVec2, face: usize, vertices: [u32; 3], bary: [f64; 3]) -> Lifted {
+    /// The surface point at barycentric `bary` of `face`, for the image point `rho · e^{iθ}`.
+    fn lifted(&self, rho: f64, theta: f64, face: usize, bary: [f64; 3]) -> Lifted {
         let s = self.surface;
+        let vertices = s.triangles[face];
         let at = |values: &[DVec3]| {
             values[vertices[0] as usize] * bary[0]
                 + values[vertices[1] as usize] * bary[1]
@@ -192,7 +190,8 @@ impl<'a> Lift<'a> {
         let p = at(&s.positions);
         let n = at(&s.vertex_normals).normalize_or_zero();
         let n = if n == DVec3::ZERO { s.face_normals[face] } else { n };
-        Lifted { w, p, n, face: face as u32 }
+        let (sin, cos) = num::sin_cos(theta);
+        Lifted { w: DVec2::new(rho * cos, rho * sin), p, n, face: face as u32 }
     }
 }
 
@@ -258,12 +257,14 @@ impl PoleStar {
             span > WIDE_FACE_RAD || (c[1] - c[0]).perp_dot(c[2] - c[0]) >= 0.0
         };
         let mut faces = vec![pole_face];
-        let mut best = Self::of(map, faces.clone());
+        let mut best = Self::of(map, &faces);
+        let mut next = grow(&faces);
         for _ in 0..MAX_STAR_RINGS {
-            faces = grow(&faces);
-            if let Some(star) = Self::of(map, faces.clone()) {
+            faces = next;
+            next = grow(&faces);
+            if let Some(star) = Self::of(map, &faces) {
                 best = Some(star);
-                if !grow(&faces).iter().any(|&g| faces.binary_search(&g).is_err() && wide(g)) {
+                if !next.iter().any(|&g| faces.binary_search(&g).is_err() && wide(g)) {
                     break;
                 }
             }
@@ -276,7 +277,7 @@ impl PoleStar {
         })
     }
 
-    fn of(map: &SlitMap, faces: Vec<usize>) -> Option<Self> {
+    fn of(map: &SlitMap, faces: &[usize]) -> Option<Self> {
         let tris = map.triangles();
         let mut edges: Vec<(u32, u32)> =
             faces.iter().flat_map(|&f| (0..3).map(move |k| (tris[f][k], tris[f][(k + 1) % 3]))).collect();
@@ -299,7 +300,7 @@ impl PoleStar {
             return None; // winds more than once, or leaves gaps: not star-shaped
         }
         rim.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let faces = faces.into_iter().map(|f| (f, tris[f].map(|v| map.w[v as usize]))).collect();
+        let faces = faces.iter().map(|&f| (f, tris[f].map(|v| map.w[v as usize]))).collect();
         let reach = rim.iter().map(|e| e.2.length()).fold(0.0, f64::max);
         Some(Self { faces, rim, reach })
     }

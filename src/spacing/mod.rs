@@ -238,8 +238,6 @@ struct Spacer<'a> {
     meridians: usize,
     fold_compromises: usize,
     crease_compromises: usize,
-    /// Whether bands get crease meridians (off while a band is retried without them).
-    creases_on: bool,
     /// arg w of the meridians that decided the last ring (see [`Spacer::next_radius`]).
     binding: Vec<f64>,
 }
@@ -311,10 +309,11 @@ struct Band {
     /// Radius of ring k (1 for the outer boundary).
     hi: f64,
     thetas: Vec<f64>,
-    /// Whether each meridian is within [`TIP_WINDOW`] of a slit tip (tested point by point).
-    near_tip: Vec<bool>,
-    /// Whether each meridian crosses a crease (tested point by point).
-    on_crease: Vec<bool>,
+    /// Whether each meridian is also tested point by point: within [`TIP_WINDOW`] of a slit tip,
+    /// or crossing a crease.
+    pointwise: Vec<bool>,
+    /// Whether the band has crease meridians.
+    creased: bool,
     /// Ring k's chain per meridian; `None` for the first ring (nothing cut above it).
     upper: Option<Vec<Chain>>,
     /// Index of the meridian that failed last: tested first next time.
@@ -375,7 +374,6 @@ impl<'a> Spacer<'a> {
             meridians: 0,
             fold_compromises: 0,
             crease_compromises: 0,
-            creases_on: true,
             binding: Vec::new(),
         }
     }
@@ -385,7 +383,7 @@ impl<'a> Spacer<'a> {
         let mut last_step: Option<f64> = None;
         loop {
             let hi = rings.last().map_or(1.0, |r| r.radius);
-            let (mut band, hi_length) = self.band(hi, rings.is_empty(), last_step)?;
+            let (mut band, hi_length) = self.band(hi, rings.is_empty(), last_step, true)?;
             if let Some(last) = rings.last_mut() {
                 last.length_mm = hi_length;
             }
@@ -400,15 +398,12 @@ impl<'a> Spacer<'a> {
                 break;
             }
             let mut radius = self.next_radius(&mut band, last_step)?;
-            if !(hi - radius > 1e-12) && band.on_crease.contains(&true) {
+            if !(hi - radius > 1e-12) && band.creased {
                 // A concave crease sharper than the ball leaves more than h whatever the rings
                 // (the surface makes it impossible): reported, and this band spaced without its
                 // crease meridians.
                 self.crease_compromises += 1;
-                self.creases_on = false;
-                let retry = self.band(hi, rings.is_empty(), last_step);
-                self.creases_on = true;
-                band = retry?.0;
+                band = self.band(hi, rings.is_empty(), last_step, false)?.0;
                 radius = self.next_radius(&mut band, last_step)?;
             }
             if !(hi - radius > 1e-12) {
@@ -493,7 +488,13 @@ impl<'a> Spacer<'a> {
 
     /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip, outer
     /// corner and crease crossing) and ring k's centre chains on them; also the ring's length.
-    fn band(&mut self, hi: f64, first: bool, last_step: Option<f64>) -> Result<(Band, f64), SpacingError> {
+    fn band(
+        &mut self,
+        hi: f64,
+        first: bool,
+        last_step: Option<f64>,
+        with_creases: bool,
+    ) -> Result<(Band, f64), SpacingError> {
         let (length, cumulative) = self.ring_length(hi)?;
         let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
         let mut thetas: Vec<f64> = Vec::with_capacity(n + 6 * self.slits.len());
@@ -527,11 +528,10 @@ impl<'a> Spacer<'a> {
             }
         }
         // Where the band's rings cross a crease (the next ring is expected at most about two
-        // last steps below this one). The scallop along those meridians has a kink at the
-        // crease: they are tested point by point too.
+        // last steps below this one).
         let depth = last_step.map_or(0.05, |s| 2.0 * s).min(hi - self.r_min);
         let mut on_crease: Vec<f64> = Vec::new();
-        for &(a, b) in self.creases.iter().filter(|_| self.creases_on) {
+        for &(a, b) in self.creases.iter().filter(|_| with_creases) {
             let (lo_r, hi_r) = (a.y.min(b.y), a.y.max(b.y));
             if lo_r > hi || hi_r < hi - depth {
                 continue;
@@ -556,18 +556,20 @@ impl<'a> Spacer<'a> {
         self.meridians += thetas.len();
         let upper =
             if first { None } else { Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?) };
-        // Near a slit tip the meridians bend around the end of the hole on the surface, so the
-        // distances along them need not be monotone: those are also tested point by point.
-        let near_tip = thetas
+        // Near a slit tip the meridians bend around the end of the hole on the surface, and across
+        // a crease the scallop has a kink, so the distances along them need not be monotone:
+        // those are also tested point by point.
+        let pointwise = thetas
             .iter()
             .map(|&t| {
-                self.slits.iter().any(|s| {
-                    let d = |a: f64| ((t - a + PI).rem_euclid(TAU) - PI).abs();
-                    d(s.theta_start).min(d(s.theta_start + s.extent)) <= TIP_WINDOW
-                })
+                on_crease.binary_search_by(|x| x.total_cmp(&t)).is_ok()
+                    || self.slits.iter().any(|s| {
+                        let d = |a: f64| ((t - a + PI).rem_euclid(TAU) - PI).abs();
+                        d(s.theta_start).min(d(s.theta_start + s.extent)) <= TIP_WINDOW
+                    })
             })
             .collect();
-        let on_crease = thetas.iter().map(|t| on_crease.binary_search_by(|x| x.total_cmp(t)).is_ok()).collect();
+        let creased = !on_crease.is_empty();
         // The meridians next to those that decided the ring above most likely decide this one.
         let mut active = Vec::new();
         for &t in &self.binding {
@@ -576,7 +578,7 @@ impl<'a> Spacer<'a> {
         }
         active.sort_unstable();
         active.dedup();
-        Ok((Band { hi, thetas, near_tip, on_crease, upper, last_fail: 0, active }, length))
+        Ok((Band { hi, thetas, pointwise, creased, upper, last_fail: 0, active }, length))
     }
 
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
@@ -714,9 +716,7 @@ impl<'a> Spacer<'a> {
                 Ok(upper[i].distance(up) <= r && lower.distance(down) <= r)
             }
             (Some(upper), None) => {
-                if (band.near_tip[i] || band.on_crease[i])
-                    && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)?
-                {
+                if band.pointwise[i] && !self.band_points_ok(&upper[i], &lower, rho, band.hi, theta)? {
                     return Ok(false);
                 }
                 self.cusp_ok(&upper[i], &lower, rho, band.hi, theta)

@@ -1,4 +1,5 @@
-//! Shared helpers of the integration tests: LinuxCNC's standalone G-code interpreter `rs274`.
+//! Shared helpers of the integration tests: where the shared meshes are, and LinuxCNC's
+//! standalone G-code interpreter `rs274`.
 //!
 //! How it is run (LinuxCNC 2.9, Debian package `linuxcnc-uspace`): the program and a one-line
 //! tool table are written to a fresh temporary directory, then
@@ -37,6 +38,16 @@ pub struct Interpreted {
     pub active_comments: Vec<String>,
     /// Every canonical call, one a line.
     pub canon: String,
+}
+
+/// `../shared/meshes` beside the main checkout; a clone elsewhere uses the machine's copy.
+pub fn shared_mesh_dir() -> PathBuf {
+    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
+    if beside.is_dir() {
+        beside
+    } else {
+        PathBuf::from("/work/shared/meshes")
+    }
 }
 
 static RUN: AtomicUsize = AtomicUsize::new(0);
