@@ -12,13 +12,14 @@
 
 use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenQuality, Flattening};
 use crate::gcode::{self, GcodeError, GcodeOptions, Post};
+use crate::mesh::nearest::FaceTree;
 use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
 use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
 use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
 use crate::spacing::{self, Rings, SpacingError, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
-use crate::toolpath::{self, Axes, Toolpath, ToolpathError, ToolpathOptions};
+use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
 use glam::DVec3;
 use serde::Serialize;
@@ -53,6 +54,23 @@ pub struct PlanOptions {
     pub verify_samples: usize,
     /// Part name for the G-code header (sanitised by the post). Default "part".
     pub part_name: String,
+    /// How the STL's facets are read. Default [`Facets::Exact`].
+    pub facets: Facets,
+}
+
+/// How the planner reads the facets of the STL.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Facets {
+    /// The STL is the part: every ball centre is kept off every facet
+    /// ([`toolpath::clear_facets`]), and the verifier counts a sample deeper inside the swept
+    /// ball than the path's chord tolerance as a gouge.
+    Exact,
+    /// The STL tessellates a smooth surface: the ball rides the interpolated vertex normals and
+    /// may dip into a facet by the facets' own deviation from those normals, R(1 − cos δ), which
+    /// the verifier tolerates ([`facet_tolerance_mm`]). For coarse tessellations of smooth
+    /// parts, where keeping the ball off 10° facets would leave several h at every crease.
+    Smooth,
 }
 
 impl Default for PlanOptions {
@@ -72,6 +90,7 @@ impl Default for PlanOptions {
             safe_z_mm: None,
             verify_samples: 100_000,
             part_name: "part".into(),
+            facets: Facets::Exact,
         }
     }
 }
@@ -216,6 +235,7 @@ impl Planner {
             direction: options.direction,
             cut: options.cut,
             chord_tolerance_mm: chord_tolerance_mm(r, options.scallop_mm),
+            radius_mm: r,
             ..SpiralOptions::default()
         };
         let spiral = spiral::spiral(&self.surface, &map, &rings, &spiral_options)?;
@@ -232,18 +252,28 @@ impl Planner {
             safe_z_mm: options.safe_z_mm,
             ..ToolpathOptions::default()
         };
-        let contacts = spiral.contacts();
-        let toolpath = toolpath::toolpath(&contacts, &spiral.normals(), &toolpath_options)?;
-        let path = verify::path_metrics(&contacts, options.feed_mm_min);
+        let (contacts, normals, clearance) = match options.facets {
+            Facets::Exact => {
+                let faces = FaceTree::new(&self.surface.positions, &self.surface.triangles);
+                let tolerance = spiral_options.chord_tolerance_mm;
+                toolpath::clear_facets(&faces, &spiral.contacts(), &spiral.normals(), r, tolerance)
+            }
+            Facets::Smooth => (spiral.contacts(), spiral.normals(), Clearance::default()),
+        };
+        let toolpath = toolpath::toolpath(&contacts, &normals, &toolpath_options)?;
+        // The designed contact curve: cleared contacts are touch points, which stall on a
+        // vertex while the ball rolls over it, so their turning angles say nothing of the motion.
+        let path = verify::path_metrics(&spiral.contacts(), options.feed_mm_min);
         timings.toolpath = now() - t;
 
         let summary = PathSummary {
             length_mm: path.length_mm,
-            points: path.points,
+            points: toolpath.stats.cut_points,
             retractions: toolpath.stats.retractions,
             max_turn_deg: path.max_turn_deg,
             rho2: path.rho2,
             time_min: toolpath.stats.estimated_time_s / 60.0,
+            clearance,
         };
 
         stage(4);
@@ -266,7 +296,12 @@ impl Planner {
                 radius_mm: r,
                 scallop_mm: options.scallop_mm,
                 samples: options.verify_samples,
-                gouge_tolerance_mm: facet_tolerance_mm(&self.surface, r),
+                gouge_tolerance_mm: match options.facets {
+                    // Centres clear every facet; straight moves between them are split where
+                    // they dip deeper than the chord tolerance.
+                    Facets::Exact => spiral_options.chord_tolerance_mm,
+                    Facets::Smooth => facet_tolerance_mm(&self.surface, r).max(spiral_options.chord_tolerance_mm),
+                },
                 ..VerifyOptions::default()
             };
             Some(verify::verify(&self.surface, &[centres], &verify_options)?)
@@ -291,8 +326,8 @@ impl Planner {
 
 /// How deep a ball placed along the interpolated vertex normal can dip below the plane of the
 /// facet it touches: R(1 − cos δ), δ the largest angle between a face normal and its vertex
-/// normals (at least 1e-4 mm). This is below the facets' own chordal error from the true
-/// surface, so the verifier counts only deeper penetrations as gouges.
+/// normals (at least 1e-4 mm). In [`Facets::Smooth`] this is below the facets' own deviation
+/// from the smooth surface they tessellate, so the verifier counts only deeper penetrations.
 pub fn facet_tolerance_mm(surface: &Surface, radius_mm: f64) -> f64 {
     let mut cos_min: f64 = 1.0;
     for (f, t) in surface.triangles.iter().enumerate() {
@@ -338,6 +373,9 @@ pub struct PathSummary {
     pub max_turn_deg: f64,
     pub rho2: f64,
     pub time_min: f64,
+    /// Ball centres moved off facets nearer than R ([`toolpath::clear_facets`]; zeros with
+    /// [`Facets::Smooth`]).
+    pub clearance: Clearance,
 }
 
 /// The options as the report shows them (plain values, the CLI's names).
@@ -357,6 +395,7 @@ pub struct OptionsReport {
     pub spindle_rpm: f64,
     pub safe_z_mm: Option<f64>,
     pub verify_samples: usize,
+    pub facets: Facets,
 }
 
 impl OptionsReport {
@@ -380,6 +419,7 @@ impl OptionsReport {
             spindle_rpm: o.spindle_rpm,
             safe_z_mm: o.safe_z_mm,
             verify_samples: o.verify_samples,
+            facets: o.facets,
         }
     }
 }

@@ -173,3 +173,44 @@ fn map_with_a_3d_pole_and_bad_poles() {
         assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
     }
 }
+
+#[test]
+fn plan_keeps_the_ball_off_the_facets_unless_told_they_are_smooth() {
+    let part = temp("cap.stl");
+    assert!(slitpath(&["fixture", "spherical_cap_hole", "-o", part.to_str().unwrap()]).status.success());
+    let report = |facets: &str| -> serde_json::Value {
+        let (out, json) = (temp(&format!("cap-{facets}.ngc")), temp(&format!("cap-{facets}.json")));
+        let run = slitpath(&[
+            "plan",
+            part.to_str().unwrap(),
+            "--radius",
+            "3",
+            "--scallop",
+            "0.02",
+            "--verify-samples",
+            "20000",
+            "--facets",
+            facets,
+            "-o",
+            out.to_str().unwrap(),
+            "--report",
+            json.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+    };
+    let (exact, smooth) = (report("exact"), report("smooth"));
+    assert_eq!(
+        (exact["options"]["facets"].as_str(), smooth["options"]["facets"].as_str()),
+        (Some("exact"), Some("smooth"))
+    );
+    // The sphere's vertex normals dip a ball into almost every facet; smooth leaves them.
+    let moved = |r: &serde_json::Value| r["path"]["clearance"]["moved"].as_u64().unwrap();
+    assert!(moved(&exact) * 2 > exact["path"]["points"].as_u64().unwrap(), "{}", exact["path"]);
+    assert_eq!(moved(&smooth), 0);
+    assert_eq!(exact["verify"]["gouges"].as_u64(), Some(0));
+
+    let bad = slitpath(&["plan", part.to_str().unwrap(), "--facets", "round", "-o", temp("x.ngc").to_str().unwrap()]);
+    let err = String::from_utf8(bad.stderr).unwrap();
+    assert!(!bad.status.success() && err.trim().lines().count() == 1 && err.contains("--facets `round`"), "{err}");
+}

@@ -8,7 +8,7 @@ mod common;
 
 use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
-use slitpath::plan::{Plan, PlanOptions, Planner};
+use slitpath::plan::{Facets, Plan, PlanOptions, Planner};
 use slitpath::{fixtures, mesh};
 
 fn planner(name: &str) -> Planner {
@@ -124,7 +124,10 @@ fn the_verifier_finds_the_scallop_under_control_and_no_gouge() {
         // from polyline chains round the tips and sparse meridians there; the 40k panel kept
         // 1.16 h in an ear at a corner until ears were split.
         assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {}", v.max_scallop_mm);
-        assert!(v.max_gouge_mm <= 5e-3, "{name}: gouge {} mm", v.max_gouge_mm);
+        // Issue 4: no gouge. The ball rode the interpolated normals and dipped up to 2.2 µm into
+        // the facets (882 samples on saddle_2_holes) until its centres were kept off them; what
+        // remains is the straight moves' chord tolerance, and the verifier counts deeper ones.
+        assert_eq!(v.gouges, 0, "{name}: {} gouges, deepest {} mm", v.gouges, v.max_gouge_mm);
         assert!(pl.origin.energy.e_min <= pl.origin.centroid_energy.e_min + 1e-9);
     }
 }
@@ -179,7 +182,7 @@ fn a_smaller_scallop_gives_more_rings_and_bad_options_are_refused() {
 }
 
 /// Plans with `options`, prints the verifier's figures and asserts the promise: max scallop
-/// ≤ 1.02 h, uncovered ≤ 0.1 %, one continuous pass.
+/// ≤ 1.02 h, uncovered ≤ 0.1 %, one continuous pass, and no gouge when the facets are exact.
 fn assert_scallop_kept(name: &str, p: &Planner, options: &PlanOptions) {
     let pl = plan(p, options);
     let v = pl.verification().expect("verified");
@@ -196,6 +199,9 @@ fn assert_scallop_kept(name: &str, p: &Planner, options: &PlanOptions) {
     );
     assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
     assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
+    if options.facets == Facets::Exact {
+        assert_eq!(v.gouges, 0, "{name}: {} gouges, deepest {} mm", v.gouges, v.max_gouge_mm);
+    }
     assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
 }
 
@@ -214,6 +220,9 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // Faceted meshes at their own scale (the plan bench's options: R = diagonal / 60, h = R / 150,
     // 5-axis). Their largest scallops sat on creases between facets (10–14° on wavy_mesh_with_hole),
     // between meridians: 1.45 h and 1.32 h before the spacing tested the creases' crossings.
+    // They tessellate smooth shapes coarsely: a ball kept off facets turning 10–14° at this
+    // scale left 1.95 h (wavy) and 8.7 h (face) at the creases, so they are planned as smooth
+    // surfaces. (Smooth, the ball dips into face_holes' coarse facets by up to 11.6 µm = 16 h.)
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
         let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
             eprintln!("skipped: {name} is absent");
@@ -227,6 +236,7 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
             scallop_mm: r / 150.0,
             axes: slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 },
             post: Post::Cl,
+            facets: Facets::Smooth,
             ..PlanOptions::default()
         };
         assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);

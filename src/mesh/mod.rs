@@ -18,6 +18,10 @@
 //!    geometry), so the slit map can open every hole into a slit without folding a triangle and
 //!    every face has a corner off the boundary.
 //!
+//! And a query structure the later stages share: [`nearest`], the nearest facet point of a 3D
+//! point and a ball moved onto the mesh's offset surface (the toolpath keeps every ball centre
+//! off the facets with it).
+//!
 //! Invariants of the output [`Surface`]: every edge has one or two faces, every vertex has a single
 //! fan, faces are wound counter-clockwise seen from the tool side, `loops[0]` is the outer boundary
 //! (the longest loop), and loops are ordered so the surface lies on their left seen from the tool
@@ -27,6 +31,7 @@
 
 pub mod extract;
 pub mod geometry;
+pub mod nearest;
 pub mod refine;
 pub mod stl;
 pub mod topology;

@@ -1,6 +1,7 @@
 //! Points of the surface and of the flattened plane: nearest surface point of a 3D point, the
 //! face of the flattened domain containing a pole, and the 3D point of a pole.
 
+use crate::mesh::nearest::closest_on_triangle;
 use crate::mesh::Surface;
 use crate::slitmap::{barycentric, PlanarDomain};
 use glam::{DVec2, DVec3};
@@ -18,44 +19,6 @@ pub(crate) fn nearest_on_surface(surface: &Surface, p: DVec3) -> (usize, [f64; 3
         }
     }
     (best.1, best.2)
-}
-
-/// Barycentric coordinates of the point of triangle `abc` closest to `p` (Ericson, Real-Time
-/// Collision Detection, §5.1.5).
-fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return [1.0, 0.0, 0.0];
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return [0.0, 1.0, 0.0];
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return [1.0 - v, v, 0.0];
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return [1.0 - w, 0.0, w];
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return [0.0, 1.0 - w, w];
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    [1.0 - v - w, v, w]
 }
 
 /// The face of the flattened domain containing `q` (largest minimum barycentric coordinate, so

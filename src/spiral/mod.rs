@@ -16,8 +16,10 @@
 //! ring length wins (seed: "trial and error within [0, 2π]").
 //!
 //! The curve is then lifted to the surface (inverse slit map) and sampled adaptively: a piece
-//! is split until its chord deviates from the curve by at most `chord_tolerance_mm` and is at
-//! most `max_segment_mm` long.
+//! is split until its chord deviates from the curve by at most `chord_tolerance_mm`, both on the
+//! surface and on the ball-centre curve cc + R·n (the machine interpolates the ball linearly: a
+//! chord of a convex centre curve dips into the part, R/ρ more than the contact chord), and is
+//! at most `max_segment_mm` long.
 //!
 //! Direction: the spiral is built inwards in the sense that puts the uncut material on the
 //! tool's right for a clockwise (M3) spindle, i.e. climb milling: clockwise seen from the tool
@@ -59,8 +61,11 @@ pub struct SpiralOptions {
     pub direction: Direction,
     /// Default climb.
     pub cut: Cut,
-    /// Largest distance between the lifted curve and its chords, mm. Default 0.002.
+    /// Largest distance between the lifted curve, or its ball-centre curve, and their chords, mm.
+    /// Default 0.002.
     pub chord_tolerance_mm: f64,
+    /// Ball radius R of the centre curve cc + R·n, mm. Default 3.
+    pub radius_mm: f64,
     /// Longest segment, mm. Default 1.
     pub max_segment_mm: f64,
     /// Steepest sideways angle of a bridge on the surface, degrees. Default 8.
@@ -77,6 +82,7 @@ impl Default for SpiralOptions {
             direction: Direction::Inward,
             cut: Cut::Climb,
             chord_tolerance_mm: 0.002,
+            radius_mm: 3.0,
             max_segment_mm: 1.0,
             max_bridge_angle_deg: 8.0,
             slit_margin_rad: 0.04,
@@ -149,6 +155,9 @@ impl Spiral {
 
 fn check_options(o: &SpiralOptions) -> Result<(), SpiralError> {
     let bad = |m: String| Err(SpiralError::InvalidOption(m));
+    if !(o.radius_mm.is_finite() && o.radius_mm >= 0.0) {
+        return bad(format!("ball radius {} mm must be a number ≥ 0", o.radius_mm));
+    }
     if !(o.chord_tolerance_mm.is_finite() && o.chord_tolerance_mm > 0.0) {
         return bad(format!("chord tolerance {} mm must be a positive number", o.chord_tolerance_mm));
     }
@@ -340,6 +349,7 @@ fn sample(
         Ok(PathPoint { cc: l.p, normal: l.n, w: l.w, face: l.face })
     };
     let tol = options.chord_tolerance_mm;
+    let radius = options.radius_mm;
     let max_seg = options.max_segment_mm;
     let mut out: Vec<PathPoint> = Vec::new();
     // March along each piece: a step is accepted when its chord is short enough and its
@@ -368,7 +378,9 @@ fn sample(
                 let pb = eval(piece, ub, Some(here.face))?;
                 let pm = eval(piece, u + 0.5 * step, Some(here.face))?;
                 let chord = (pb.cc - here.cc).length();
-                let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol;
+                let centre = |p: &PathPoint| p.cc + radius * p.normal;
+                let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol
+                    && segment_dist(centre(&pm), centre(&here), centre(&pb)) <= tol;
                 if chord <= max_seg && (smooth || step <= min_step) {
                     // At the smallest step a deviating midpoint is a kink of the P1 lift.
                     break (ub, pb);

@@ -3,12 +3,14 @@
 //! What it computes (DESIGN.md "toolpath", seed 000 §2.2.1 eq. 5): for every cutter-contact
 //! (CC) point `cc[i]` with unit surface normal `n[i]` (towards the tool) of ONE continuous pass,
 //!
-//! - the ball centre `centre = cc + R·n` (R the ball radius),
+//! - the ball centre `centre = cc + R·n` (R the ball radius; [`clear_facets`] beforehand moves
+//!   centres that dip into a facet onto the mesh's offset surface, rewriting cc and n),
 //! - the tool axis `a`: 3-axis, the chosen fixed axis ([`Axes::Three`], default +Z); 5-axis
 //!   ([`Axes::Five`]), seed 000 eq. 5 with a tilt added,
 //!   `a = cos β·cos γ·n + sin β·t + cos β·sin γ·b`, where β is the lead angle, γ the tilt angle,
-//!   `t` the unit feed direction projected onto the tangent plane (centred difference of the CC
-//!   points, one-sided at the ends) and `b = t × n` (to the right of the feed direction seen from
+//!   `t` the unit feed direction projected onto the tangent plane (centred difference of the ball
+//!   centres, one-sided at the ends: where the ball rolls over a vertex of the mesh its contact
+//!   stays put while the centre moves) and `b = t × n` (to the right of the feed direction seen from
 //!   the tool). So a positive lead leans the axis forwards (towards the feed direction), the tilt
 //!   rotates the leaned axis about `t`, positive to the right. γ = 0 is eq. 5 exactly. The
 //!   centred difference makes the axis as smooth as the path itself (no extra smoothing),
@@ -38,7 +40,7 @@
 //!
 //! Preconditions (each fault is a [`ToolpathError`] naming the field or point index): at least
 //! two points, as many normals as points, finite coordinates, normals of length 1 ± 1e-3
-//! (renormalised), consecutive points at least 1e-7 mm apart, 3-axis normals not facing away
+//! (renormalised), consecutive ball centres at least 1e-7 mm apart, 3-axis normals not facing away
 //! from the tool axis (n·a ≥ 0: no undercut), 5-axis feed directions not along the normal,
 //! options as documented on [`ToolpathOptions`], and a safe height at least `clearance_mm`
 //! above every contact point, tool tip and lead move.
@@ -51,6 +53,10 @@
 
 // `!(x > 0.0)` is deliberate throughout: NaN must fail every validity test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod clearance;
+
+pub use clearance::{clear_facets, Clearance};
 
 use crate::num;
 use glam::DVec3;
@@ -225,7 +231,7 @@ pub enum ToolpathError {
     NonFinitePoint { index: usize },
     #[error("normal {index} is not a unit vector (length {length}): pass unit normals")]
     NotUnitNormal { index: usize, length: f64 },
-    #[error("contact point {index} repeats point {} (distance {distance} mm): remove repeated points", index - 1)]
+    #[error("the ball centre at contact point {index} repeats the previous one (distance {distance} mm): remove repeated points")]
     RepeatedPoint { index: usize, distance: f64 },
     #[error("normal {index} faces away from the tool axis (n·axis = {dot}): the ball cannot reach this undercut")]
     Undercut { index: usize, dot: f64 },
@@ -245,8 +251,9 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
         return Err(ToolpathError::TooFewPoints { count: cc.len() });
     }
     let n = check_points(cc, normals)?;
-    let axes = tool_axes(cc, &n, &o)?;
     let centres: Vec<DVec3> = cc.iter().zip(&n).map(|(&p, &nn)| p + o.radius * nn).collect();
+    check_steps(&centres)?;
+    let axes = tool_axes(&centres, &n, &o)?;
     let tips: Vec<DVec3> = centres.iter().zip(&axes).map(|(&c, &a)| c - o.radius * a).collect();
     for i in 1..tips.len() {
         let distance = tips[i].distance(tips[i - 1]);
@@ -327,7 +334,7 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
     })
 }
 
-/// Consecutive tips (and contact points) closer than this are a repeated point.
+/// Consecutive tips (and ball centres) closer than this are a repeated point.
 const MIN_STEP_MM: f64 = 1e-7;
 /// Default safe height above the highest point the tool reaches.
 const DEFAULT_SAFE_ABOVE_MM: f64 = 10.0;
@@ -405,7 +412,7 @@ impl Checked {
     }
 }
 
-/// Finite points, unit normals (renormalised), no repeated point.
+/// Finite points, unit normals (renormalised).
 fn check_points(cc: &[DVec3], normals: &[DVec3]) -> Result<Vec<DVec3>, ToolpathError> {
     let mut n = Vec::with_capacity(normals.len());
     for (i, (&p, &nn)) in cc.iter().zip(normals).enumerate() {
@@ -416,19 +423,25 @@ fn check_points(cc: &[DVec3], normals: &[DVec3]) -> Result<Vec<DVec3>, ToolpathE
         if !((length - 1.0).abs() <= 1e-3) {
             return Err(ToolpathError::NotUnitNormal { index: i, length });
         }
-        if i > 0 {
-            let distance = p.distance(cc[i - 1]);
-            if !(distance >= MIN_STEP_MM) {
-                return Err(ToolpathError::RepeatedPoint { index: i, distance });
-            }
-        }
         n.push(nn / length);
     }
     Ok(n)
 }
 
-/// The tool axis at every contact point (module docs).
-fn tool_axes(cc: &[DVec3], n: &[DVec3], o: &Checked) -> Result<Vec<DVec3>, ToolpathError> {
+/// No repeated ball centre. (Contacts may repeat: a ball rolling over a vertex of the mesh
+/// keeps touching it while its centre moves.)
+fn check_steps(centres: &[DVec3]) -> Result<(), ToolpathError> {
+    for i in 1..centres.len() {
+        let distance = centres[i].distance(centres[i - 1]);
+        if !(distance >= MIN_STEP_MM) {
+            return Err(ToolpathError::RepeatedPoint { index: i, distance });
+        }
+    }
+    Ok(())
+}
+
+/// The tool axis at every ball centre (module docs).
+fn tool_axes(centres: &[DVec3], n: &[DVec3], o: &Checked) -> Result<Vec<DVec3>, ToolpathError> {
     let (cn, ct, cb) = match o.rule {
         AxisRule::Fixed(axis) => {
             for (i, &nn) in n.iter().enumerate() {
@@ -437,14 +450,14 @@ fn tool_axes(cc: &[DVec3], n: &[DVec3], o: &Checked) -> Result<Vec<DVec3>, Toolp
                     return Err(ToolpathError::Undercut { index: i, dot });
                 }
             }
-            return Ok(vec![axis; cc.len()]);
+            return Ok(vec![axis; centres.len()]);
         }
         AxisRule::Lead(cn, ct, cb) => (cn, ct, cb),
     };
-    let last = cc.len() - 1;
-    (0..cc.len())
+    let last = centres.len() - 1;
+    (0..centres.len())
         .map(|i| {
-            let d = cc[(i + 1).min(last)] - cc[i.saturating_sub(1)];
+            let d = centres[(i + 1).min(last)] - centres[i.saturating_sub(1)];
             let tangent = d - d.dot(n[i]) * n[i];
             let len = tangent.length();
             if !(len > 1e-9 * d.length()) {

@@ -17,7 +17,7 @@ use wasm_bindgen::JsCast;
 use crate::gcode::Post;
 use crate::mesh::{self, MeshOptions, MeshOutput};
 use crate::origin::{EnergyEvaluator, OriginChoice, OriginOptions};
-use crate::plan::{Plan, PlanOptions, Planner as Core};
+use crate::plan::{Facets, Plan, PlanOptions, Planner as Core};
 use crate::slitmap::SlitMap;
 use crate::spiral::{Cut, Direction};
 use crate::toolpath::Axes;
@@ -114,6 +114,7 @@ struct JsPlanOptions {
     safe_z_mm: Option<f64>,
     verify_samples: Option<usize>,
     part_name: Option<String>,
+    facets: Option<Facets>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -125,7 +126,7 @@ enum JsOrigin {
 }
 
 impl JsPlanOptions {
-    const FIELDS: [&'static str; 15] = [
+    const FIELDS: [&'static str; 16] = [
         "radiusMm",
         "scallopMm",
         "axes",
@@ -141,6 +142,7 @@ impl JsPlanOptions {
         "safeZMm",
         "verifySamples",
         "partName",
+        "facets",
     ];
 
     fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
@@ -191,6 +193,7 @@ impl JsPlanOptions {
             safe_z_mm: js.safe_z_mm,
             verify_samples: js.verify_samples.unwrap_or(d.verify_samples),
             part_name: js.part_name.unwrap_or(d.part_name),
+            facets: js.facets.unwrap_or(d.facets),
         })
     }
 }
@@ -291,7 +294,7 @@ impl Planner {
 
     /// Plans with `options` (see `JsPlanOptions`: radiusMm, scallopMm, axes, leadDeg, tiltDeg,
     /// direction, cut, origin, post, feedMmMin, plungeFeedMmMin, spindleRpm, safeZMm,
-    /// verifySamples, partName) and returns the plan report (the CLI's `--report` object).
+    /// verifySamples, partName, facets) and returns the plan report (the CLI's `--report` object).
     /// `on_progress(stage, done, total)` is called as each stage starts.
     pub fn plan(&mut self, options: JsValue, on_progress: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let options = JsPlanOptions::parse(options)?;

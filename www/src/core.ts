@@ -80,6 +80,11 @@ export interface PlanOptions {
   verifySamples?: number;
   /** Name in the G-code header (the CLI uses the file name without extension). Default "part". */
   partName?: string;
+  /**
+   * "exact" (default): the STL is the part, the ball never enters a facet. "smooth": the STL
+   * tessellates a smooth surface, the ball follows the vertex normals.
+   */
+  facets?: "exact" | "smooth";
 }
 
 /** The plan report: the CLI's `--report` JSON. */

@@ -24,6 +24,7 @@ const PARAM: Record<Key, string> = {
   spindleRpm: "spindle",
   safeZMm: "safez",
   verifySamples: "samples",
+  facets: "facets",
 };
 
 const CHOICES = {
@@ -31,6 +32,7 @@ const CHOICES = {
   direction: ["inward", "outward"],
   cut: ["climb", "conventional"],
   post: ["linuxcnc", "grbl", "ac", "cl"],
+  facets: ["exact", "smooth"],
 } as const;
 
 /** "auto" | "centroid" | "hole:N" | "x,y" (flattened plane) | "x,y,z" (3D point). */
@@ -60,7 +62,8 @@ function parse<K extends Key>(key: K, text: string): FullPlanOptions[K] | null {
     case "direction":
     case "cut":
     case "post":
-      value = (CHOICES[key as "direction" | "cut" | "post"] as readonly string[]).includes(text) ? text : null;
+    case "facets":
+      value = (CHOICES[key as "direction" | "cut" | "post" | "facets"] as readonly string[]).includes(text) ? text : null;
       break;
     case "axes":
       value = text === "3" ? 3 : text === "5" ? 5 : null;
@@ -138,5 +141,6 @@ export function cliArguments(options: FullPlanOptions): string[] {
   args.push("--origin", originToText(options.origin), "--direction", options.direction);
   args.push("--feed", String(options.feedMmMin), "--spindle", String(options.spindleRpm));
   if (options.safeZMm !== null) args.push("--safe-z", String(options.safeZMm));
+  args.push("--facets", options.facets);
   return args;
 }

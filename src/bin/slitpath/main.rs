@@ -105,6 +105,10 @@ mod cli {
             /// Verifier samples (0 skips the verification).
             #[arg(long, default_value_t = 100_000)]
             verify_samples: usize,
+            /// exact (the STL is the part: the ball never enters a facet) or smooth (the STL
+            /// tessellates a smooth surface: the ball follows the vertex normals).
+            #[arg(long, default_value = "exact")]
+            facets: String,
             /// Where to write the G-code or CL data.
             #[arg(short, long)]
             output: PathBuf,
@@ -204,6 +208,7 @@ mod cli {
                 spindle,
                 safe_z,
                 verify_samples,
+                facets,
                 output,
                 report,
                 mesh: args,
@@ -224,6 +229,7 @@ mod cli {
                     spindle,
                     safe_z,
                     verify_samples,
+                    facets: &facets,
                 })?;
                 let (gcode, json) = crate::plan::run(&part, &args.options(), &options)?;
                 write(&output, gcode.as_bytes())?;

@@ -4,7 +4,7 @@ use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::origin::OriginChoice;
-use slitpath::plan::{PlanOptions, Planner};
+use slitpath::plan::{Facets, PlanOptions, Planner};
 use slitpath::spiral::{Cut, Direction};
 use slitpath::toolpath::Axes;
 use std::path::Path;
@@ -27,6 +27,7 @@ pub struct Args<'a> {
     pub spindle: f64,
     pub safe_z: Option<f64>,
     pub verify_samples: usize,
+    pub facets: &'a str,
 }
 
 pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
@@ -46,6 +47,11 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         "conventional" => Cut::Conventional,
         c => return Err(format!("--cut `{c}`: use climb or conventional")),
     };
+    let facets = match a.facets {
+        "exact" => Facets::Exact,
+        "smooth" => Facets::Smooth,
+        f => return Err(format!("--facets `{f}`: use exact or smooth")),
+    };
     let part_name = a.part.file_stem().map_or("part".into(), |s| s.to_string_lossy().into_owned());
     Ok(PlanOptions {
         radius_mm: a.radius,
@@ -61,6 +67,7 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         safe_z_mm: a.safe_z,
         verify_samples: a.verify_samples,
         part_name,
+        facets,
     })
 }
 

@@ -19,4 +19,5 @@ export const DEFAULT_PLAN_OPTIONS: Readonly<FullPlanOptions> = Object.freeze({
   spindleRpm: 12000,
   safeZMm: null,
   verifySamples: 100000,
+  facets: "exact",
 });

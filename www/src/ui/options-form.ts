@@ -7,7 +7,7 @@ import { originFromText, originToText } from "../options";
 import { el } from "./dom";
 
 type NumberKey = "radiusMm" | "scallopMm" | "leadDeg" | "tiltDeg" | "feedMmMin" | "plungeFeedMmMin" | "spindleRpm" | "safeZMm" | "verifySamples";
-type ChoiceKey = "axes" | "direction" | "cut" | "post";
+type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets";
 
 interface NumberField { key: NumberKey; id: string; label: string; unit: string; step: string; optional?: boolean; fiveAxis?: boolean }
 interface ChoiceField { key: ChoiceKey; id: string; label: string; choices: [string, string][] }
@@ -20,6 +20,7 @@ const TOOL: (NumberField | ChoiceField)[] = [
   { key: "tiltDeg", id: "tilt", label: "Tilt", unit: "°", step: "1", fiveAxis: true },
   { key: "direction", id: "direction", label: "Direction", choices: [["inward", "inward (boundary → centre)"], ["outward", "outward"]] },
   { key: "cut", id: "cut", label: "Cut", choices: [["climb", "climb"], ["conventional", "conventional"]] },
+  { key: "facets", id: "facets", label: "Facets", choices: [["exact", "exact (the STL is the part)"], ["smooth", "smooth (a tessellated smooth surface)"]] },
 ];
 const MACHINE: (NumberField | ChoiceField)[] = [
   { key: "post", id: "post", label: "Post", choices: [["linuxcnc", "LinuxCNC (3-axis)"], ["grbl", "GRBL (3-axis)"], ["ac", "5-axis AC table-table (TCP)"], ["cl", "CL data (APT)"]] },

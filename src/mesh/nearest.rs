@@ -1,0 +1,305 @@
+//! Nearest points of a triangle mesh: a bounding-volume hierarchy over the faces for queries
+//! bounded by a search radius, and the closest point of one triangle.
+//!
+//! The toolpath asks this for every ball centre (is any facet closer than the ball radius?), so
+//! a query must touch only the faces near it: the tree is traversed nearer box first and pruned
+//! by the best distance so far. Deterministic: the same mesh builds the same tree, and ties
+//! between faces at equal distance go to the lower face index.
+
+use glam::DVec3;
+
+const LEAF_SIZE: usize = 4;
+
+/// Steps of [`FaceTree::clear_ball`] before a ball is reported unresolved.
+pub const CLEAR_ROUNDS: usize = 32;
+
+/// A bounding-volume hierarchy over the faces of a mesh (median splits of the face centroids).
+///
+/// Nodes are stored depth first: a node's left child follows it, `right` is the right child; a
+/// leaf (`count > 0`) holds the faces `order[start..start + count]`.
+#[derive(Clone, Debug)]
+pub struct FaceTree {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+    corners: Vec<[DVec3; 3]>,
+    /// Unit normal and offset of each slot's plane (zero for a degenerate face): a face whose
+    /// plane is already beyond the bound is skipped without its closest point, which is most of
+    /// the faces under a ball resting on the surface.
+    planes: Vec<(DVec3, f64)>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    start: u32,
+    count: u32,
+    right: u32,
+}
+
+/// The point of the mesh nearest to a query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nearest {
+    pub face: usize,
+    /// The face's slot in the tree.
+    slot: usize,
+    /// Barycentric coordinates of `point` in `face`.
+    pub bary: [f64; 3],
+    pub point: DVec3,
+    pub distance: f64,
+}
+
+impl FaceTree {
+    /// Builds the tree of the triangles `triangles` over `positions` (indices must be valid).
+    pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> Self {
+        let corners: Vec<[DVec3; 3]> = triangles.iter().map(|t| t.map(|v| positions[v as usize])).collect();
+        let mids: Vec<DVec3> = corners.iter().map(|c| (c[0] + c[1] + c[2]) / 3.0).collect();
+        let mut order: Vec<u32> = (0..corners.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * corners.len() / LEAF_SIZE + 1);
+        if !corners.is_empty() {
+            build(&corners, &mids, &mut order, 0, &mut nodes);
+        }
+        // Leaves read their corners in leaf order, for locality.
+        let corners: Vec<[DVec3; 3]> = order.iter().map(|&f| corners[f as usize]).collect();
+        let planes = corners
+            .iter()
+            .map(|&[a, b, c]| {
+                let n = (b - a).cross(c - a).normalize_or_zero();
+                (n, n.dot(a))
+            })
+            .collect();
+        Self { nodes, order, corners, planes }
+    }
+
+    /// The nearest point of the mesh to `p` closer than `max_distance`, or `None`.
+    pub fn nearest(&self, p: DVec3, max_distance: f64) -> Option<Nearest> {
+        let mut best: Option<Nearest> = None;
+        let mut bound2 = max_distance * max_distance;
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        if let Some(root) = self.nodes.first() {
+            stack.push((0, box_distance2(root, p)));
+        }
+        while let Some((index, d2)) = stack.pop() {
+            if d2 > bound2 {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            if node.count > 0 {
+                for slot in node.start as usize..(node.start + node.count) as usize {
+                    let (n, offset) = self.planes[slot];
+                    let plane = n.dot(p) - offset;
+                    if plane * plane > bound2 {
+                        continue;
+                    }
+                    let [a, b, c] = self.corners[slot];
+                    let bary = closest_on_triangle(p, a, b, c);
+                    let q = a * bary[0] + b * bary[1] + c * bary[2];
+                    let e2 = q.distance_squared(p);
+                    let face = self.order[slot] as usize;
+                    let better = match best {
+                        None => e2 < bound2,
+                        Some(bn) => e2 < bound2 || (e2 == bound2 && face < bn.face),
+                    };
+                    if better {
+                        bound2 = e2;
+                        best = Some(Nearest { face, slot, bary, point: q, distance: e2.sqrt() });
+                    }
+                }
+                continue;
+            }
+            let (left, right) = (index + 1, node.right);
+            let dl = box_distance2(&self.nodes[left as usize], p);
+            let dr = box_distance2(&self.nodes[right as usize], p);
+            // Nearer child last, so it is taken first and tightens the bound early.
+            if dl <= dr {
+                stack.push((right, dr));
+                stack.push((left, dl));
+            } else {
+                stack.push((left, dl));
+                stack.push((right, dr));
+            }
+        }
+        best
+    }
+}
+
+/// Where [`FaceTree::clear_ball`] left a ball.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClearBall {
+    pub centre: DVec3,
+    /// The facet point the last step pushed from, nearest to `centre` on its face (`None` when
+    /// the ball was already clear); where the ball touches.
+    pub touch: Option<DVec3>,
+    /// Newton or projection steps taken (0: the ball was already clear, `centre` is the input).
+    pub rounds: usize,
+    /// Still nearer than R to a facet after [`CLEAR_ROUNDS`] (a groove narrower than the ball).
+    pub unresolved: bool,
+}
+
+impl FaceTree {
+    /// Moves a ball of radius `radius` centred at `centre` along the unit direction `dir` until
+    /// no facet is nearer than `radius` (to a relative 1e-9): the mesh's offset surface. Each
+    /// round is a Newton step on the distance to the nearest facet point q,
+    /// c += dir·(R − |c − q|)/(g·dir) with g = (c − q)/|c − q| (exact for a plane, so a ball
+    /// between facets settles in a step per facet); a facet nearly along `dir` (g·dir < 1/4, a
+    /// wall beside the ball) is left by the nearest-point projection c = q + R·g instead.
+    pub fn clear_ball(&self, centre: DVec3, dir: DVec3, radius: f64) -> ClearBall {
+        let limit = radius * (1.0 - 1e-9);
+        let mut c = centre;
+        let mut rounds = 0;
+        let mut last = None;
+        while let Some(hit) = self.nearest(c, limit) {
+            if rounds == CLEAR_ROUNDS {
+                return ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: true };
+            }
+            rounds += 1;
+            last = Some(hit.slot);
+            let g = if hit.distance > 1e-12 * radius { (c - hit.point) / hit.distance } else { dir };
+            let slope = g.dot(dir);
+            c = if slope > 0.25 { c + dir * ((radius - hit.distance) / slope) } else { hit.point + radius * g };
+        }
+        ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false }
+    }
+
+    fn touch(&self, slot: Option<usize>, p: DVec3) -> Option<DVec3> {
+        let [a, b, c] = self.corners[slot?];
+        let bary = closest_on_triangle(p, a, b, c);
+        Some(a * bary[0] + b * bary[1] + c * bary[2])
+    }
+}
+
+fn build(corners: &[[DVec3; 3]], mids: &[DVec3], ids: &mut [u32], start: usize, nodes: &mut Vec<Node>) -> u32 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let (mut mlo, mut mhi) = (lo, hi);
+    for &f in ids.iter() {
+        for c in corners[f as usize] {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+        mlo = mlo.min(mids[f as usize]);
+        mhi = mhi.max(mids[f as usize]);
+    }
+    let index = nodes.len() as u32;
+    nodes.push(Node { lo, hi, start: start as u32, count: 0, right: 0 });
+    if ids.len() <= LEAF_SIZE {
+        nodes[index as usize].count = ids.len() as u32;
+        return index;
+    }
+    let e = mhi - mlo;
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    let half = ids.len() / 2;
+    ids.select_nth_unstable_by(half, |&a, &b| {
+        mids[a as usize][axis].total_cmp(&mids[b as usize][axis]).then(a.cmp(&b))
+    });
+    let (left, right) = ids.split_at_mut(half);
+    build(corners, mids, left, start, nodes);
+    let r = build(corners, mids, right, start + half, nodes);
+    nodes[index as usize].right = r;
+    index
+}
+
+/// Squared distance from `p` to the box of `node` (0 inside).
+#[inline]
+fn box_distance2(node: &Node, p: DVec3) -> f64 {
+    let d = (node.lo - p).max(p - node.hi).max(DVec3::ZERO);
+    d.dot(d)
+}
+
+/// Barycentric coordinates of the point of triangle `abc` closest to `p` (Ericson, Real-Time
+/// Collision Detection, §5.1.5).
+pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0];
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return [1.0 - v, v, 0.0];
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return [1.0 - w, 0.0, w];
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - w, w];
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    [1.0 - v - w, v, w]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures;
+
+    /// Brute force over every face: the oracle of the tree.
+    fn nearest_brute(positions: &[DVec3], triangles: &[[u32; 3]], p: DVec3) -> (usize, f64) {
+        let mut best = (0, f64::INFINITY);
+        for (f, t) in triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            let bary = closest_on_triangle(p, a, b, c);
+            let d = (a * bary[0] + b * bary[1] + c * bary[2]).distance(p);
+            if d < best.1 {
+                best = (f, d);
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn the_tree_finds_the_brute_force_nearest_point_within_the_radius() {
+        let mesh = fixtures::saddle_2_holes();
+        let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
+        let mut state = 0x9e3779b97f4a7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (lo, hi) = crate::mesh::weld::bounding_box(&mesh.positions);
+        let (mut found, mut missed) = (0, 0);
+        for _ in 0..2000 {
+            let p = lo + (hi - lo + DVec3::splat(8.0)) * DVec3::new(next(), next(), next()) - DVec3::splat(4.0);
+            let (face, d) = nearest_brute(&mesh.positions, &mesh.triangles, p);
+            match tree.nearest(p, 3.0) {
+                Some(n) => {
+                    assert!((n.distance - d).abs() <= 1e-12 * (1.0 + d), "{p:?}: tree {} brute {d}", n.distance);
+                    assert!(
+                        n.face == face || (n.distance - d).abs() <= 1e-12 * (1.0 + d),
+                        "{p:?}: face {} vs {face}",
+                        n.face
+                    );
+                    found += 1;
+                }
+                None => {
+                    assert!(d >= 3.0, "{p:?}: missed a face at {d}");
+                    missed += 1;
+                }
+            }
+        }
+        assert!(found > 200 && missed > 200, "found {found}, beyond the radius {missed}");
+    }
+}

@@ -1,0 +1,195 @@
+//! Facet clearance: ball centres pushed off every facet closer than the ball radius.
+//!
+//! The spiral places the ball along the interpolated vertex normal, which is smooth but not the
+//! normal of the facet under the contact: the ball then dips R(1 − cos δ) into that facet, δ the
+//! angle between the two normals, and deeper into a neighbouring facet across a crease (11 µm on
+//! face_holes' 5° facets with a 3 mm ball). A machinist's STL is the part, so every centre inside
+//! the mesh's offset surface is moved onto it along its own normal n ([`FaceTree::clear_ball`]).
+//! The contact becomes the nearest facet point q and the normal (c − q)/|c − q|,
+//! so `centre = cc + R·n` still holds (to the Newton step's second-order overshoot, below 1e-9 mm
+//! at these distances) with the contact on the surface.
+//!
+//! Centres already clear are untouched, bit for bit.
+
+use crate::mesh::nearest::FaceTree;
+use glam::DVec3;
+use serde::Serialize;
+
+/// What [`clear_facets`] moved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Clearance {
+    /// Centres that were inside a facet's ball-radius offset and were moved.
+    pub moved: usize,
+    /// Largest distance a centre moved, mm.
+    pub max_move_mm: f64,
+    /// Points added where a straight move between two cleared centres dipped into a facet by
+    /// more than the chord tolerance.
+    pub inserted: usize,
+    /// Centres still nearer than R to a facet after the rounds (a groove narrower than the ball).
+    pub unresolved: usize,
+}
+
+/// Halvings of one move when its midpoint dips into a facet.
+const MAX_SPLITS: usize = 6;
+
+/// Moves every ball centre `cc[i] + R·normals[i]` out of the facets of `faces` (see the module
+/// docs), then splits each straight move between two centres whose midpoint is nearer than
+/// R − `chord_tolerance_mm` to a facet (a chord of a convex offset) at its cleared midpoint.
+/// Returns the contacts and normals of the new path.
+pub fn clear_facets(
+    faces: &FaceTree,
+    cc: &[DVec3],
+    normals: &[DVec3],
+    radius_mm: f64,
+    chord_tolerance_mm: f64,
+) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
+    let mut report = Clearance::default();
+    let cleared: Vec<(DVec3, DVec3)> =
+        cc.iter().zip(normals).map(|(&p, &n)| clear_one(faces, p, n, radius_mm, &mut report)).collect();
+    let mut out_cc = Vec::with_capacity(cleared.len());
+    let mut out_n = Vec::with_capacity(cleared.len());
+    // Half the tolerance at the midpoint: a move crossing the offset's cylinder round a convex
+    // edge off-centre dips deepest away from its midpoint.
+    let limit = radius_mm - 0.5 * chord_tolerance_mm;
+    for (i, &(p, n)) in cleared.iter().enumerate() {
+        if i > 0 {
+            let mut pending = vec![(cleared[i - 1], (p, n), 0usize)];
+            let mut inserted = Vec::new();
+            // Depth first, left half first, so the points come out in path order.
+            while let Some((a, b, depth)) = pending.pop() {
+                let (ca, cb) = (a.0 + radius_mm * a.1, b.0 + radius_mm * b.1);
+                let mid = 0.5 * (ca + cb);
+                // A move between two points outside every ball of radius R round a facet point
+                // enters such a ball by at most R − √(R² − L²/4) ≈ L²/8R: short moves need no query.
+                let short = ca.distance_squared(cb) <= 4.0 * radius_mm * chord_tolerance_mm;
+                if short || depth == MAX_SPLITS || faces.nearest(mid, limit).is_none() {
+                    inserted.push(b);
+                    continue;
+                }
+                let dir = (a.1 + b.1).normalize_or(a.1);
+                let m = clear_one(faces, mid - radius_mm * dir, dir, radius_mm, &mut report);
+                report.inserted += 1;
+                pending.push((m, b, depth + 1));
+                pending.push((a, m, depth + 1));
+            }
+            for (q, m) in inserted {
+                out_cc.push(q);
+                out_n.push(m);
+            }
+        } else {
+            out_cc.push(p);
+            out_n.push(n);
+        }
+    }
+    (out_cc, out_n, report)
+}
+
+/// One centre `p + R·n` cleared: the new contact and normal.
+fn clear_one(faces: &FaceTree, p: DVec3, n: DVec3, radius_mm: f64, report: &mut Clearance) -> (DVec3, DVec3) {
+    let start = p + radius_mm * n;
+    let ball = faces.clear_ball(start, n, radius_mm);
+    report.unresolved += ball.unresolved as usize;
+    if ball.rounds == 0 {
+        return (p, n);
+    }
+    report.moved += 1;
+    report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
+    match ball.touch {
+        Some(q) => (q, (ball.centre - q).normalize()),
+        None => (ball.centre - radius_mm * n, n),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two facets meeting at a convex ridge along the y axis, each sloping 5° down from it.
+    fn ridge() -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let s = 5f64.to_radians().tan();
+        let positions = vec![
+            DVec3::new(-10.0, -10.0, -10.0 * s),
+            DVec3::new(0.0, -10.0, 0.0),
+            DVec3::new(0.0, 10.0, 0.0),
+            DVec3::new(-10.0, 10.0, -10.0 * s),
+            DVec3::new(10.0, -10.0, -10.0 * s),
+            DVec3::new(10.0, 10.0, -10.0 * s),
+        ];
+        (positions, vec![[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    }
+
+    #[test]
+    fn a_ball_on_the_interpolated_normal_is_lifted_onto_the_facet_offset() {
+        let (positions, triangles) = ridge();
+        let tree = FaceTree::new(&positions, &triangles);
+        let r = 3.0;
+        // Half a millimetre off the ridge on the left facet, with the ridge's vertical normal: the
+        // ball dips R(1 − cos 5°) into the left facet and rises R(1/cos 5° − 1) to clear it.
+        let s = 5f64.to_radians().tan();
+        let facet = DVec3::new(-s, 0.0, 1.0).normalize();
+        let (cc, normals, report) = clear_facets(
+            &tree,
+            &[DVec3::new(-0.5, 0.0, -0.5 * s), DVec3::new(-8.0, 0.0, -8.0 * s)],
+            &[DVec3::Z, facet],
+            r,
+            1e-3,
+        );
+        let kept = (DVec3::new(-8.0, 0.0, -8.0 * s), facet);
+        assert_eq!((report.moved, report.inserted, report.unresolved), (1, 0, 0));
+        // The first centre now lies R from the left facet's plane and no nearer to the surface.
+        let centre = cc[0] + r * normals[0];
+        let plane_distance = centre.dot(facet);
+        assert!((plane_distance - r).abs() < 1e-9, "{plane_distance}");
+        assert!(tree.nearest(centre, r * (1.0 - 1e-8)).is_none());
+        assert!(
+            report.max_move_mm > 0.0 && (report.max_move_mm - r * (1.0 / 5f64.to_radians().cos() - 1.0)).abs() < 1e-9
+        );
+        // The contact is on the surface, the normal unit.
+        assert!(tree.nearest(cc[0], 1e-12).is_some() && (normals[0].length() - 1.0).abs() < 1e-12);
+        // A ball already clear of every facet is untouched.
+        assert_eq!((cc[1], normals[1]), kept);
+    }
+
+    #[test]
+    fn a_ball_in_a_concave_crease_settles_touching_both_facets() {
+        let (mut positions, triangles) = ridge();
+        for p in &mut positions {
+            p.z = -p.z; // the valley: both facets rise 5° from the y axis
+        }
+        let tree = FaceTree::new(&positions, &triangles);
+        let r = 3.0;
+        // Right on the crease with the vertical normal, the ball dips into both facets.
+        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], r, 1e-3);
+        assert_eq!((report.moved, report.unresolved), (1, 0));
+        let centre = cc[0] + r * normals[0];
+        // The ball of radius R in a symmetric 170° valley sits over the crease at R / cos 5°,
+        // touching both facets.
+        assert!(centre.x.abs() < 1e-9 && (centre.z - r / 5f64.to_radians().cos()).abs() < 1e-9, "{centre:?}");
+        assert!(tree.nearest(centre, r * (1.0 - 1e-9)).is_none());
+    }
+
+    #[test]
+    fn a_straight_move_over_a_ridge_is_split_until_it_clears_the_facets() {
+        let (positions, triangles) = ridge();
+        let tree = FaceTree::new(&positions, &triangles);
+        let (r, tol) = (3.0, 1e-3);
+        let s = 5f64.to_radians().tan();
+        let (left, right) = (DVec3::new(-s, 0.0, 1.0).normalize(), DVec3::new(s, 0.0, 1.0).normalize());
+        // Two balls resting on either facet 2 mm from the ridge: the move between them passes
+        // 0.2 mm inside the ridge's offset cylinder.
+        let ends = [DVec3::new(-2.0, 0.0, -2.0 * s), DVec3::new(2.0, 0.0, -2.0 * s)];
+        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], r, tol);
+        // The ends are clear; every inserted midpoint had to be pushed out.
+        assert_eq!((report.moved, report.unresolved), (report.inserted, 0));
+        assert!(report.inserted > 2 && cc.len() == 2 + report.inserted, "{report:?}");
+        assert_eq!((cc[0], *cc.last().unwrap()), (ends[0], ends[1]));
+        let centres: Vec<DVec3> = cc.iter().zip(&normals).map(|(&p, &n)| p + r * n).collect();
+        for w in centres.windows(2) {
+            assert!(w[1].x > w[0].x, "path order");
+            for k in 0..=64 {
+                let c = w[0].lerp(w[1], k as f64 / 64.0);
+                assert!(tree.nearest(c, r - 1.01 * tol).is_none(), "{c:?} dips into a facet");
+            }
+        }
+    }
+}
