@@ -256,7 +256,8 @@ impl Planner {
             Facets::Exact => {
                 let faces = FaceTree::new(&self.surface.positions, &self.surface.triangles);
                 let tolerance = spiral_options.chord_tolerance_mm;
-                toolpath::clear_facets(&faces, &spiral.contacts(), &spiral.normals(), r, tolerance)
+                let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
+                toolpath::clear_facets(&faces, &spiral.contacts(), &spiral.normals(), &cc_faces, r, tolerance)
             }
             Facets::Smooth => (spiral.contacts(), spiral.normals(), Clearance::default()),
         };

@@ -150,6 +150,19 @@ impl InverseMap {
         }
     }
 
+    /// The face containing `q` with its smallest barycentric coordinate at least `min_bary`
+    /// (the largest such coordinate wins, the lowest face index on ties), among the faces of
+    /// `q`'s cell.
+    pub(crate) fn containing(&self, q: DVec2, min_bary: f64) -> Option<usize> {
+        let (ix, iy) = self.cell_of(q)?;
+        let mut best = None;
+        self.best_in_cell(ix, iy, q, &mut best);
+        match best {
+            Some((m, loc)) if m >= min_bary => Some(loc.face),
+            _ => None,
+        }
+    }
+
     /// Like [`InverseMap::locate`], but when `w` is outside every triangle returns the nearest
     /// triangle among those of the surrounding 3×3 cells, with barycentrics clamped to the
     /// triangle (useful for rings that touch the polygonal approximation of the unit circle).

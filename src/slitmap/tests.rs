@@ -153,3 +153,30 @@ fn log_polar_corners_are_unwrapped_per_triangle() {
         }
     }
 }
+
+#[test]
+fn the_pole_face_from_the_grid_is_the_linear_scan_s() {
+    let d = planar(&fixtures::plate_3_holes());
+    let solver = SlitMapSolver::new(&d, &SlitMapOptions::default()).unwrap();
+    let scan = |q: DVec2| -> Option<usize> {
+        let mut best: Option<(usize, f64)> = None;
+        for (f, t) in d.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|v| d.positions[v as usize]);
+            let bary = inverse::barycentric(a, b, c, q);
+            let m = bary[0].min(bary[1]).min(bary[2]);
+            if m >= -1e-12 && best.map_or(true, |(_, bm)| m > bm) {
+                best = Some((f, m));
+            }
+        }
+        best.map(|(f, _)| f)
+    };
+    // Face centres, vertices (ties between the faces round them) and edge midpoints.
+    let mut queries: Vec<DVec2> = d.positions.clone();
+    for t in &d.triangles {
+        let [a, b, c] = t.map(|v| d.positions[v as usize]);
+        queries.extend([(a + b + c) / 3.0, 0.5 * (a + b)]);
+    }
+    for q in queries {
+        assert_eq!(solver.face_containing(q), scan(q), "{q:?}");
+    }
+}

@@ -33,19 +33,24 @@ pub struct Clearance {
 const MAX_SPLITS: usize = 6;
 
 /// Moves every ball centre `cc[i] + R·normals[i]` out of the facets of `faces` (see the module
-/// docs), then splits each straight move between two centres whose midpoint is nearer than
+/// docs; `cc_faces[i]`, the face of `cc[i]`, is tried first), then splits each straight move between two centres whose midpoint is nearer than
 /// R − `chord_tolerance_mm` to a facet (a chord of a convex offset) at its cleared midpoint.
 /// Returns the contacts and normals of the new path.
 pub fn clear_facets(
     faces: &FaceTree,
     cc: &[DVec3],
     normals: &[DVec3],
+    cc_faces: &[u32],
     radius_mm: f64,
     chord_tolerance_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
     let mut report = Clearance::default();
-    let cleared: Vec<(DVec3, DVec3)> =
-        cc.iter().zip(normals).map(|(&p, &n)| clear_one(faces, p, n, radius_mm, &mut report)).collect();
+    let cleared: Vec<(DVec3, DVec3)> = cc
+        .iter()
+        .zip(normals)
+        .enumerate()
+        .map(|(i, (&p, &n))| clear_one(faces, p, n, cc_faces.get(i).map(|&f| f as usize), radius_mm, &mut report))
+        .collect();
     let mut out_cc = Vec::with_capacity(cleared.len());
     let mut out_n = Vec::with_capacity(cleared.len());
     // Half the tolerance at the midpoint: a move crossing the offset's cylinder round a convex
@@ -67,7 +72,7 @@ pub fn clear_facets(
                     continue;
                 }
                 let dir = (a.1 + b.1).normalize_or(a.1);
-                let m = clear_one(faces, mid - radius_mm * dir, dir, radius_mm, &mut report);
+                let m = clear_one(faces, mid - radius_mm * dir, dir, None, radius_mm, &mut report);
                 report.inserted += 1;
                 pending.push((m, b, depth + 1));
                 pending.push((a, m, depth + 1));
@@ -85,9 +90,16 @@ pub fn clear_facets(
 }
 
 /// One centre `p + R·n` cleared: the new contact and normal.
-fn clear_one(faces: &FaceTree, p: DVec3, n: DVec3, radius_mm: f64, report: &mut Clearance) -> (DVec3, DVec3) {
+fn clear_one(
+    faces: &FaceTree,
+    p: DVec3,
+    n: DVec3,
+    face: Option<usize>,
+    radius_mm: f64,
+    report: &mut Clearance,
+) -> (DVec3, DVec3) {
     let start = p + radius_mm * n;
-    let ball = faces.clear_ball(start, n, radius_mm);
+    let ball = faces.clear_ball(start, n, radius_mm, face);
     report.unresolved += ball.unresolved as usize;
     if ball.rounds == 0 {
         return (p, n);
@@ -131,6 +143,7 @@ mod tests {
             &tree,
             &[DVec3::new(-0.5, 0.0, -0.5 * s), DVec3::new(-8.0, 0.0, -8.0 * s)],
             &[DVec3::Z, facet],
+            &[0, 1],
             r,
             1e-3,
         );
@@ -159,7 +172,7 @@ mod tests {
         let tree = FaceTree::new(&positions, &triangles);
         let r = 3.0;
         // Right on the crease with the vertical normal, the ball dips into both facets.
-        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], r, 1e-3);
+        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 1e-3);
         assert_eq!((report.moved, report.unresolved), (1, 0));
         let centre = cc[0] + r * normals[0];
         // The ball of radius R in a symmetric 170° valley sits over the crease at R / cos 5°,
@@ -178,7 +191,7 @@ mod tests {
         // Two balls resting on either facet 2 mm from the ridge: the move between them passes
         // 0.2 mm inside the ridge's offset cylinder.
         let ends = [DVec3::new(-2.0, 0.0, -2.0 * s), DVec3::new(2.0, 0.0, -2.0 * s)];
-        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], r, tol);
+        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], &[0, 3], r, tol);
         // The ends are clear; every inserted midpoint had to be pushed out.
         assert_eq!((report.moved, report.unresolved), (report.inserted, 0));
         assert!(report.inserted > 2 && cc.len() == 2 + report.inserted, "{report:?}");
