@@ -133,6 +133,30 @@ fn the_verifier_finds_the_scallop_under_control_and_no_gouge() {
 }
 
 #[test]
+fn the_optimised_pole_does_not_lengthen_the_path_by_more_than_2_percent() {
+    // Issue 4: the optimised pole beats the centroid pole on E_min (asserted above) without a
+    // path more than 2 % longer. Not sliver_mesh: its centroid pole folds 35 faces of the map
+    // next to a slit tip and the spiral stops there ("the path jumps"); the search avoids such
+    // poles, `--origin centroid` does not (a known limit).
+    for name in PLANNED.into_iter().filter(|&n| n != "sliver_mesh") {
+        let p = planner(name);
+        let options = PlanOptions { verify_samples: 0, ..PlanOptions::default() };
+        let auto = plan(&p, &options);
+        let centroid = plan(&p, &PlanOptions { origin: slitpath::origin::OriginChoice::Centroid, ..options });
+        let ratio = auto.path.length_mm / centroid.path.length_mm;
+        println!(
+            "{name}: E_min {:.1} vs centroid {:.1}, length {:.0} vs {:.0} mm ({:+.2} %)",
+            auto.origin.energy.e_min,
+            centroid.origin.energy.e_min,
+            auto.path.length_mm,
+            centroid.path.length_mm,
+            100.0 * (ratio - 1.0)
+        );
+        assert!(ratio <= 1.02, "{name}: the optimised pole's path is {:.2} % longer", 100.0 * (ratio - 1.0));
+    }
+}
+
+#[test]
 fn every_post_of_a_planned_part_is_accepted_by_rs274_and_reproduces_the_tips() {
     let p = planner("plate_3_holes");
     for post in [Post::LinuxCnc, Post::Grbl, Post::Ac] {

@@ -101,7 +101,16 @@ export interface PlanReport {
     evaluations: number;
   };
   rings: unknown;
-  path: { length_mm: number; points: number; retractions: number; max_turn_deg: number; rho2: number; time_min: number };
+  path: {
+    length_mm: number;
+    points: number;
+    retractions: number;
+    max_turn_deg: number;
+    rho2: number;
+    time_min: number;
+    /** Ball centres moved off the facets (zeros with `facets: "smooth"`). */
+    clearance: { moved: number; max_move_mm: number; inserted: number; unresolved: number };
+  };
   verify: {
     max_scallop_mm: number;
     mean_scallop_mm: number;

@@ -27,6 +27,14 @@ function rows(plan: PlanResult, limit: number): Row[] {
     ["metric-vmax", "V_max (uniformity)", `${n3.format(verify.v_max_mm2)} mm²`],
     ["metric-uncovered", "Uncovered", `${n3.format(100 * verify.uncovered_fraction)} % of samples`, verify.uncovered_fraction > 0],
     ["metric-gouges", "Gouges", n0.format(verify.gouges), verify.gouges > 0],
+    [
+      "metric-clearance",
+      "Ball lifted off facets",
+      `${n0.format(path.clearance.moved)} centres, up to ${mm(path.clearance.max_move_mm)}`,
+      // Lifted by more than h/2 the ball leaves visible cusps where facets meet: the STL is
+      // coarse for this h (facets "smooth" follows the vertex normals instead).
+      path.clearance.max_move_mm > 0.5 * limit || path.clearance.unresolved > 0,
+    ],
     ["metric-gouge-risk", "Gouge-risk area", `${n3.format(report.gouge_risk_area_mm2)} mm²`, report.gouge_risk_area_mm2 > 0],
     [
       "metric-compromises",
