@@ -5,9 +5,14 @@
 //! angle between the two normals, and deeper into a neighbouring facet across a crease (11 µm on
 //! face_holes' 5° facets with a 3 mm ball). A machinist's STL is the part, so every centre inside
 //! the mesh's offset surface is moved onto it along its own normal n ([`FaceTree::clear_ball`]).
-//! The contact becomes the nearest facet point q and the normal (c − q)/|c − q|,
-//! so `centre = cc + R·n` still holds (to the Newton step's second-order overshoot, below 1e-9 mm
-//! at these distances) with the contact on the surface.
+//! The normal becomes (c − q)/|c − q|, q the touched facet point, and the contact c − R·n, so
+//! `centre = cc + R·n` holds exactly and the contact is q (up to a Newton step's overshoot
+//! where the ball rests on an edge).
+//!
+//! Between two cleared centres the machine moves straight, and a straight move can still cut:
+//! the chord of a convex offset, or a move past a feature narrower than the ball. Every move is
+//! checked whole against the facets ([`FaceTree::segment_nearer_than`]) and split at its
+//! cleared midpoint while it comes nearer than R − the chord tolerance.
 //!
 //! Centres already clear are untouched, bit for bit.
 
@@ -25,16 +30,18 @@ pub struct Clearance {
     /// Points added where a straight move between two cleared centres dipped into a facet by
     /// more than the chord tolerance.
     pub inserted: usize,
-    /// Centres still nearer than R to a facet after the rounds (a groove narrower than the ball).
+    /// Centres still nearer than R to a facet after the rounds (a groove narrower than the
+    /// ball), and moves still dipping deeper than the tolerance after [`MAX_SPLITS`] halvings.
     pub unresolved: usize,
 }
 
-/// Halvings of one move when its midpoint dips into a facet.
-const MAX_SPLITS: usize = 6;
+/// Halvings of one move that dips into a facet.
+pub const MAX_SPLITS: usize = 12;
 
 /// Moves every ball centre `cc[i] + R·normals[i]` out of the facets of `faces` (see the module
-/// docs; `cc_faces[i]`, the face of `cc[i]`, is tried first), then splits each straight move between two centres whose midpoint is nearer than
-/// R − `chord_tolerance_mm` to a facet (a chord of a convex offset) at its cleared midpoint.
+/// docs; `cc_faces[i]`, the face of `cc[i]`, is tried first), then splits each straight move
+/// between two centres that comes nearer than R − `chord_tolerance_mm` to a facet (a chord of a
+/// convex offset, or a move past a feature narrower than the ball) at its cleared midpoint.
 /// Returns the contacts and normals of the new path.
 pub fn clear_facets(
     faces: &FaceTree,
@@ -53,9 +60,7 @@ pub fn clear_facets(
         .collect();
     let mut out_cc = Vec::with_capacity(cleared.len());
     let mut out_n = Vec::with_capacity(cleared.len());
-    // Half the tolerance at the midpoint: a move crossing the offset's cylinder round a convex
-    // edge off-centre dips deepest away from its midpoint.
-    let limit = radius_mm - 0.5 * chord_tolerance_mm;
+    let limit = radius_mm - chord_tolerance_mm;
     for (i, &(p, n)) in cleared.iter().enumerate() {
         if i > 0 {
             let mut pending = vec![(cleared[i - 1], (p, n), 0usize)];
@@ -63,14 +68,19 @@ pub fn clear_facets(
             // Depth first, left half first, so the points come out in path order.
             while let Some((a, b, depth)) = pending.pop() {
                 let (ca, cb) = (a.0 + radius_mm * a.1, b.0 + radius_mm * b.1);
-                let mid = 0.5 * (ca + cb);
                 // A move between two points outside every ball of radius R round a facet point
                 // enters such a ball by at most R − √(R² − L²/4) ≈ L²/8R: short moves need no query.
-                let short = ca.distance_squared(cb) <= 4.0 * radius_mm * chord_tolerance_mm;
-                if short || depth == MAX_SPLITS || faces.nearest(mid, limit).is_none() {
+                let short = ca.distance_squared(cb) <= 8.0 * radius_mm * chord_tolerance_mm;
+                if short || !faces.segment_nearer_than(ca, cb, limit) {
                     inserted.push(b);
                     continue;
                 }
+                if depth == MAX_SPLITS {
+                    report.unresolved += 1;
+                    inserted.push(b);
+                    continue;
+                }
+                let mid = 0.5 * (ca + cb);
                 let dir = (a.1 + b.1).normalize_or(a.1);
                 let m = clear_one(faces, mid - radius_mm * dir, dir, None, radius_mm, &mut report);
                 report.inserted += 1;
@@ -106,10 +116,12 @@ fn clear_one(
     }
     report.moved += 1;
     report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
-    match ball.touch {
-        Some(q) => (q, (ball.centre - q).normalize()),
-        None => (ball.centre - radius_mm * n, n),
-    }
+    // The centre stays exactly where it cleared every facet; the contact is R below it towards
+    // the touch point (on the surface but for a Newton step's overshoot where the ball rests on
+    // an edge: renormalising onto the touch point instead pulled such centres back into
+    // neighbouring facets, by up to 1.3 h on beetle).
+    let n = ball.touch.map_or(n, |q| (ball.centre - q).normalize());
+    (ball.centre - radius_mm * n, n)
 }
 
 #[cfg(test)]
