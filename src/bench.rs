@@ -7,6 +7,7 @@ use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
 use crate::mesh::{self, MeshOptions, TriMesh};
 use crate::num;
 use crate::origin::{self, EnergyEvaluator, OriginOptions};
+use crate::plan::Facets;
 use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
 use crate::verify::{self, SweptVolume, VerifyOptions};
 use glam::DVec3;
@@ -361,23 +362,26 @@ pub fn format_verify(f: &VerifyFigures) -> String {
 /// holes, rings, path length, max scallop / h and each stage's time (from the plan report), for
 /// `cargo bench --bench plan` and its wasm twin.
 pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
-    plan_row(name, part, false, now)
+    plan_row(name, part, false, Facets::Exact, now)
 }
 
 /// [`run_plan`] for the shared meshes, most of them unit-scale 3D shapes: where a sixtieth of the
 /// diagonal is below 3 mm the ball is that, h = R/150 (the same ratio), 5-axis with CL output
-/// (their walls exceed a table-table machine's A range).
+/// (their walls exceed a table-table machine's A range). Two rows: facets exact (the default)
+/// and smooth, since these coarse meshes are where the two differ.
 pub fn run_plan_scaled(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
-    plan_row(name, part, true, now)
+    let exact = plan_row(name, part, true, Facets::Exact, now)?;
+    let smooth = plan_row("  (smooth)", part, true, Facets::Smooth, now)?;
+    Ok(format!("{exact}\n{smooth}"))
 }
 
-fn plan_row(name: &str, part: &TriMesh, scaled: bool, now: &dyn Fn() -> f64) -> Result<String, String> {
+fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn Fn() -> f64) -> Result<String, String> {
     let t = now();
     let out = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?;
     let read = now() - t;
     let holes = out.surface.loops.len().saturating_sub(1);
     let (lo, hi) = crate::mesh::weld::bounding_box(&out.surface.positions);
-    let mut options = crate::plan::PlanOptions::default();
+    let mut options = crate::plan::PlanOptions { facets, ..crate::plan::PlanOptions::default() };
     let small = (hi - lo).length() / 60.0;
     if scaled && small < options.radius_mm {
         options.radius_mm = small;
@@ -389,15 +393,19 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, now: &dyn Fn() -> f64) -> 
     let plan = planner.plan(&options, &mut |_, _, _| {}, now).map_err(|e| e.to_string())?;
     let r = &plan.report;
     let t = &r.timings_ms;
-    let ratio = r.verify.as_ref().map_or(f64::NAN, |v| v.max_scallop_mm / options.scallop_mm);
+    let h = options.scallop_mm;
+    let (ratio, p99, gouges) =
+        r.verify.as_ref().map_or((f64::NAN, f64::NAN, 0), |v| (v.max_scallop_mm / h, v.p99_scallop_mm / h, v.gouges));
     Ok(format!(
-        "{:<24} {:>7} {:>5} {:>5} {:>9.0} {:>6.2} | {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>7.0}",
+        "{:<24} {:>7} {:>5} {:>5} {:>9.0} {:>6.2} {:>5.2} {:>6} | {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>7.0}",
         name,
         r.mesh.machined.as_ref().map_or(r.mesh.faces, |m| m.faces),
         holes,
         r.rings,
         r.path.length_mm,
         ratio,
+        p99,
+        gouges,
         read,
         t.flatten,
         t.slitmap,
@@ -411,7 +419,7 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, now: &dyn Fn() -> f64) -> 
     ))
 }
 
-pub const PLAN_HEADER: &str = "case                       faces holes rings length mm max/h |  read  flat  slit origin spacng spiral  tool verify  post   total (ms)";
+pub const PLAN_HEADER: &str = "case                       faces holes rings length mm  max/h p99/h gouges |  read  flat  slit origin spacng spiral  tool verify  post   total (ms)";
 
 /// The analytic parts of the pipeline benchmark, and issue 5's 40k- and 300k-face parts with 6
 /// holes.
