@@ -35,6 +35,9 @@ pub struct Clearance {
     pub unresolved: usize,
 }
 
+/// A facet nearer than R·(1 − this) to a centre is a penetration ([`FaceTree::clear_ball`]'s).
+const CLEAR_REL: f64 = 1e-9;
+
 /// Halvings of one move that dips into a facet.
 pub const MAX_SPLITS: usize = 12;
 
@@ -52,51 +55,79 @@ pub fn clear_facets(
     chord_tolerance_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
     let mut report = Clearance::default();
-    let cleared: Vec<(DVec3, DVec3)> = cc
-        .iter()
-        .zip(normals)
-        .enumerate()
-        .map(|(i, (&p, &n))| clear_one(faces, p, n, cc_faces.get(i).map(|&f| f as usize), radius_mm, &mut report))
-        .collect();
-    let mut out_cc = Vec::with_capacity(cleared.len());
-    let mut out_n = Vec::with_capacity(cleared.len());
+    let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
+    let mut out_cc = Vec::with_capacity(cc.len());
+    let mut out_n = Vec::with_capacity(cc.len());
     let limit = radius_mm - chord_tolerance_mm;
-    for (i, &(p, n)) in cleared.iter().enumerate() {
-        if i > 0 {
-            let mut pending = vec![(cleared[i - 1], (p, n), 0usize)];
-            let mut inserted = Vec::new();
-            // Depth first, left half first, so the points come out in path order.
-            while let Some((a, b, depth)) = pending.pop() {
-                let (ca, cb) = (a.0 + radius_mm * a.1, b.0 + radius_mm * b.1);
-                // A move between two points outside every ball of radius R round a facet point
-                // enters such a ball by at most R − √(R² − L²/4) ≈ L²/8R: short moves need no query.
-                let short = ca.distance_squared(cb) <= 8.0 * radius_mm * chord_tolerance_mm;
-                if short || !faces.segment_nearer_than(ca, cb, limit) {
-                    inserted.push(b);
-                    continue;
-                }
-                if depth == MAX_SPLITS {
-                    report.unresolved += 1;
-                    inserted.push(b);
-                    continue;
-                }
-                let mid = 0.5 * (ca + cb);
-                let dir = (a.1 + b.1).normalize_or(a.1);
-                let m = clear_one(faces, mid - radius_mm * dir, dir, None, radius_mm, &mut report);
-                report.inserted += 1;
-                pending.push((m, b, depth + 1));
-                pending.push((a, m, depth + 1));
-            }
-            for (q, m) in inserted {
-                out_cc.push(q);
-                out_n.push(m);
-            }
-        } else {
-            out_cc.push(p);
-            out_n.push(n);
+    let centre = |q: (DVec3, DVec3)| q.0 + radius_mm * q.1;
+    let mut prev = (DVec3::ZERO, DVec3::ZERO);
+    for i in 0..cc.len() {
+        if i == 0 {
+            prev = clear_one(faces, cc[0], normals[0], face(0), true, radius_mm, &mut report);
+            out_cc.push(prev.0);
+            out_n.push(prev.1);
+            continue;
         }
+        // Off its own face first; one traversal then confirms that no other facet is within R
+        // of it and tests the move to it (most centres need no more).
+        let mut scratch = Clearance::default();
+        let mut b = clear_one(faces, cc[i], normals[i], face(i), false, radius_mm, &mut scratch);
+        // Between two centres outside every ball of radius R round a facet point a move enters
+        // such a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
+        let short = |a: DVec3, b: DVec3| a.distance_squared(b) <= 8.0 * radius_mm * chord_tolerance_mm;
+        let (ca, mut cb) = (centre(prev), centre(b));
+        let segment_limit = if short(ca, cb) { f64::NEG_INFINITY } else { limit };
+        let (end_hit, mut move_hit) = faces.move_hits(ca, cb, radius_mm * (1.0 - CLEAR_REL), segment_limit);
+        if end_hit {
+            b = clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report);
+            cb = centre(b);
+            move_hit = !short(ca, cb) && faces.segment_nearer_than(ca, cb, limit);
+        } else {
+            report.merge(&scratch);
+        }
+        if !move_hit {
+            out_cc.push(b.0);
+            out_n.push(b.1);
+            prev = b;
+            continue;
+        }
+        let mut pending = vec![(prev, b, 0usize)];
+        let mut inserted = Vec::new();
+        // Depth first, left half first, so the points come out in path order.
+        while let Some((a, b, depth)) = pending.pop() {
+            let (ca, cb) = (centre(a), centre(b));
+            if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+                inserted.push(b);
+                continue;
+            }
+            if depth == MAX_SPLITS {
+                report.unresolved += 1;
+                inserted.push(b);
+                continue;
+            }
+            let mid = 0.5 * (ca + cb);
+            let dir = (a.1 + b.1).normalize_or(a.1);
+            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
+            report.inserted += 1;
+            pending.push((m, b, depth + 1));
+            pending.push((a, m, depth + 1));
+        }
+        for (q, m) in inserted {
+            out_cc.push(q);
+            out_n.push(m);
+        }
+        prev = b;
     }
     (out_cc, out_n, report)
+}
+
+impl Clearance {
+    fn merge(&mut self, other: &Clearance) {
+        self.moved += other.moved;
+        self.max_move_mm = self.max_move_mm.max(other.max_move_mm);
+        self.inserted += other.inserted;
+        self.unresolved += other.unresolved;
+    }
 }
 
 /// One centre `p + R·n` cleared: the new contact and normal.
@@ -105,11 +136,12 @@ fn clear_one(
     p: DVec3,
     n: DVec3,
     face: Option<usize>,
+    search: bool,
     radius_mm: f64,
     report: &mut Clearance,
 ) -> (DVec3, DVec3) {
     let start = p + radius_mm * n;
-    let ball = faces.clear_ball(start, n, radius_mm, face);
+    let ball = faces.clear_ball(start, n, radius_mm, face, search);
     report.unresolved += ball.unresolved as usize;
     if ball.rounds == 0 {
         return (p, n);
