@@ -78,7 +78,8 @@ pub struct OriginOptions {
     pub radius_mm: f64,
     /// Number of radius bins of the piecewise-linear f (seed App. C's p). Default 32.
     pub bins: usize,
-    /// Starting points of the gradient search (the centroid first). Default 4.
+    /// Starting points of the gradient search (the centroid first). Default 3 (a fourth found
+    /// the same pole on every fixture and every shared mesh, for 8–45 % more evaluations).
     pub starts: usize,
     /// Budget of E_min evaluations (one slit map each) for the whole search. Default 400.
     pub max_evaluations: usize,
@@ -95,7 +96,7 @@ impl Default for OriginOptions {
         Self {
             radius_mm: 3.0,
             bins: 32,
-            starts: 4,
+            starts: 3,
             max_evaluations: 400,
             tolerance_rel: 1e-3,
             choice: OriginChoice::Auto,
