@@ -97,7 +97,7 @@ impl FaceTree {
         let (point2, segment2, reach2) = (point_limit * point_limit, segment_limit * segment_limit, reach * reach);
         // A limit of −∞ (or any below −L/2) tests the end only.
         let (mut point_hit, mut segment_hit) = (false, reach < 0.0);
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let mut stack = Stack::new(0u32);
         if !self.nodes.is_empty() {
             stack.push(0);
         }
@@ -141,7 +141,7 @@ impl FaceTree {
         let half = 0.5 * a.distance(b);
         let reach = limit + half;
         let (limit2, reach2) = (limit * limit, reach * reach);
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let mut stack = Stack::new(0u32);
         if !self.nodes.is_empty() {
             stack.push(0);
         }
@@ -175,7 +175,7 @@ impl FaceTree {
     pub fn nearest(&self, p: DVec3, max_distance: f64) -> Option<Nearest> {
         let mut best: Option<Nearest> = None;
         let mut bound2 = max_distance * max_distance;
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        let mut stack = Stack::new((0u32, 0.0f64));
         if let Some(root) = self.nodes.first() {
             stack.push((0, box_distance2(root, p)));
         }
@@ -342,6 +342,30 @@ fn build(corners: &[[DVec3; 3]], mids: &[DVec3], ids: &mut [u32], start: usize, 
     let r = build(corners, mids, right, start + half, nodes);
     nodes[index as usize].right = r;
     index
+}
+
+/// A traversal stack without allocation. The tree is balanced (median splits), so its depth is
+/// at most 32 for any u32 face count, and a depth-first traversal keeps at most one pending
+/// sibling per level.
+struct Stack<T: Copy> {
+    items: [T; 64],
+    len: usize,
+}
+
+impl<T: Copy> Stack<T> {
+    fn new(fill: T) -> Self {
+        Self { items: [fill; 64], len: 0 }
+    }
+
+    fn push(&mut self, item: T) {
+        self.items[self.len] = item;
+        self.len += 1;
+    }
+
+    fn pop(&mut self) -> Option<T> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.items[self.len])
+    }
 }
 
 /// Squared distance from `p` to the box of `node` (0 inside).
