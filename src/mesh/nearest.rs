@@ -1,10 +1,13 @@
 //! Nearest points of a triangle mesh: a bounding-volume hierarchy over the faces for queries
-//! bounded by a search radius, and the closest point of one triangle.
+//! bounded by a search radius (a point's nearest facet point, whether a segment comes within a
+//! distance of a facet), the mesh's offset surface along a direction ([`FaceTree::clear_ball`]),
+//! and the closest points of one triangle.
 //!
-//! The toolpath asks this for every ball centre (is any facet closer than the ball radius?), so
-//! a query must touch only the faces near it: the tree is traversed nearer box first and pruned
-//! by the best distance so far. Deterministic: the same mesh builds the same tree, and ties
-//! between faces at equal distance go to the lower face index.
+//! The toolpath asks this for every ball centre and every straight move between two (is any
+//! facet closer than the ball radius?), so a query must touch only the faces near it: the tree
+//! is traversed nearer box first and pruned by the best distance so far, and a face is tested
+//! by its plane and its bounding sphere before its closest point. Deterministic: the same mesh
+//! builds the same tree, and ties between faces at equal distance go to the lower face index.
 
 use glam::DVec3;
 
@@ -12,6 +15,10 @@ const LEAF_SIZE: usize = 4;
 
 /// Steps of [`FaceTree::clear_ball`] before a ball is reported unresolved.
 pub const CLEAR_ROUNDS: usize = 32;
+
+/// [`FaceTree::clear_ball`] clears a ball of radius R to R·(1 − this): nearer is a penetration,
+/// the rest is rounding.
+pub const CLEAR_REL: f64 = 1e-9;
 
 /// A bounding-volume hierarchy over the faces of a mesh (median splits of the face centroids).
 ///
@@ -249,7 +256,7 @@ impl FaceTree {
     /// false that is all: the ball is clear of `face`, and the caller confirms the rest (see
     /// [`FaceTree::move_hits`]).
     pub fn clear_ball(&self, centre: DVec3, dir: DVec3, radius: f64, face: Option<usize>, search: bool) -> ClearBall {
-        let limit = radius * (1.0 - 1e-9);
+        let limit = radius * (1.0 - CLEAR_REL);
         let step = |c: DVec3, hit: &Nearest| {
             let g = if hit.distance > 1e-12 * radius { (c - hit.point) / hit.distance } else { dir };
             let slope = g.dot(dir);
@@ -295,16 +302,19 @@ impl FaceTree {
     /// The point of face `face` nearest to `p`.
     fn face_point(&self, face: usize, p: DVec3) -> Option<Nearest> {
         let slot = *self.slot_of.get(face)? as usize;
-        let [a, b, c] = self.corners[slot];
-        let bary = closest_on_triangle(p, a, b, c);
-        let point = a * bary[0] + b * bary[1] + c * bary[2];
+        let (bary, point) = self.slot_point(slot, p);
         Some(Nearest { face, slot, bary, point, distance: point.distance(p) })
     }
 
     fn touch(&self, slot: Option<usize>, p: DVec3) -> Option<DVec3> {
-        let [a, b, c] = self.corners[slot?];
+        Some(self.slot_point(slot?, p).1)
+    }
+
+    /// Barycentric coordinates and position of the point of slot `slot`'s face nearest to `p`.
+    fn slot_point(&self, slot: usize, p: DVec3) -> ([f64; 3], DVec3) {
+        let [a, b, c] = self.corners[slot];
         let bary = closest_on_triangle(p, a, b, c);
-        Some(a * bary[0] + b * bary[1] + c * bary[2])
+        (bary, a * bary[0] + b * bary[1] + c * bary[2])
     }
 }
 

@@ -16,7 +16,7 @@
 //!
 //! Centres already clear are untouched, bit for bit.
 
-use crate::mesh::nearest::FaceTree;
+use crate::mesh::nearest::{FaceTree, CLEAR_REL};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -34,9 +34,6 @@ pub struct Clearance {
     /// ball), and moves still dipping deeper than the tolerance after [`MAX_SPLITS`] halvings.
     pub unresolved: usize,
 }
-
-/// A facet nearer than R·(1 − this) to a centre is a penetration ([`FaceTree::clear_ball`]'s).
-const CLEAR_REL: f64 = 1e-9;
 
 /// Halvings of one move that dips into a facet.
 pub const MAX_SPLITS: usize = 12;
@@ -60,6 +57,9 @@ pub fn clear_facets(
     let mut out_n = Vec::with_capacity(cc.len());
     let limit = radius_mm - chord_tolerance_mm;
     let centre = |q: (DVec3, DVec3)| q.0 + radius_mm * q.1;
+    // Between two centres outside every ball of radius R round a facet point a move enters such
+    // a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
+    let short = |a: DVec3, b: DVec3| a.distance_squared(b) <= 8.0 * radius_mm * chord_tolerance_mm;
     let mut prev = (DVec3::ZERO, DVec3::ZERO);
     for i in 0..cc.len() {
         if i == 0 {
@@ -72,9 +72,6 @@ pub fn clear_facets(
         // of it and tests the move to it (most centres need no more).
         let mut scratch = Clearance::default();
         let mut b = clear_one(faces, cc[i], normals[i], face(i), false, radius_mm, &mut scratch);
-        // Between two centres outside every ball of radius R round a facet point a move enters
-        // such a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
-        let short = |a: DVec3, b: DVec3| a.distance_squared(b) <= 8.0 * radius_mm * chord_tolerance_mm;
         let (ca, mut cb) = (centre(prev), centre(b));
         let segment_limit = if short(ca, cb) { f64::NEG_INFINITY } else { limit };
         let (end_hit, mut move_hit) = faces.move_hits(ca, cb, radius_mm * (1.0 - CLEAR_REL), segment_limit);
