@@ -22,6 +22,7 @@
 //! | deterministic transcendental functions | [`num`] | implemented |
 
 pub mod bench;
+mod bvh;
 pub mod fixtures;
 pub mod flatten;
 pub mod gcode;

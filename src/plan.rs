@@ -23,6 +23,7 @@ use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOp
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
 use glam::DVec3;
 use serde::Serialize;
+use std::sync::OnceLock;
 
 /// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the
 /// CLI's and the page's.
@@ -144,6 +145,9 @@ pub struct Planner {
     pub solver: SlitMapSolver,
     /// Timings of the per-part work (`read` is the caller's, when it measured it).
     pub prepare_ms: Timings,
+    /// The facet tree for [`Facets::Exact`], built by the first plan that needs it (its time
+    /// counts in that plan's toolpath stage) and reused by every later one.
+    faces: OnceLock<FaceTree>,
 }
 
 /// The result of one plan.
@@ -199,7 +203,7 @@ impl Planner {
         let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
         let t_slit = now() - t;
         let prepare_ms = Timings { flatten: t_flatten, slitmap: t_slit, ..Timings::default() };
-        Ok(Self { report, surface, flattening, domain, solver, prepare_ms })
+        Ok(Self { report, surface, flattening, domain, solver, prepare_ms, faces: OnceLock::new() })
     }
 
     /// Plans with `options`; `progress(stage, done, total)` is called as each stage starts.
@@ -252,19 +256,24 @@ impl Planner {
             safe_z_mm: options.safe_z_mm,
             ..ToolpathOptions::default()
         };
-        let (contacts, normals, clearance) = match options.facets {
+        let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
+        let cleared = match options.facets {
             Facets::Exact => {
-                let faces = FaceTree::new(&self.surface.positions, &self.surface.triangles);
+                let faces = self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
                 let tolerance = spiral_options.chord_tolerance_mm;
                 let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
-                toolpath::clear_facets(&faces, &spiral.contacts(), &spiral.normals(), &cc_faces, r, tolerance)
+                Some(toolpath::clear_facets(faces, &designed, &designed_normals, &cc_faces, r, tolerance))
             }
-            Facets::Smooth => (spiral.contacts(), spiral.normals(), Clearance::default()),
+            Facets::Smooth => None,
         };
-        let toolpath = toolpath::toolpath(&contacts, &normals, &toolpath_options)?;
+        let toolpath = match &cleared {
+            Some((contacts, normals, _)) => toolpath::toolpath(contacts, normals, &toolpath_options)?,
+            None => toolpath::toolpath(&designed, &designed_normals, &toolpath_options)?,
+        };
+        let clearance = cleared.map_or(Clearance::default(), |(_, _, c)| c);
         // The designed contact curve: cleared contacts are touch points, which stall on a
         // vertex while the ball rolls over it, so their turning angles say nothing of the motion.
-        let path = verify::path_metrics(&spiral.contacts(), options.feed_mm_min);
+        let path = verify::path_metrics(&designed, options.feed_mm_min);
         timings.toolpath = now() - t;
 
         let summary = PathSummary {

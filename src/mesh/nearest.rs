@@ -9,9 +9,8 @@
 //! by its plane and its bounding sphere before its closest point. Deterministic: the same mesh
 //! builds the same tree, and ties between faces at equal distance go to the lower face index.
 
+use crate::bvh::{self, Node};
 use glam::DVec3;
-
-const LEAF_SIZE: usize = 4;
 
 /// Steps of [`FaceTree::clear_ball`] before a ball is reported unresolved.
 pub const CLEAR_ROUNDS: usize = 32;
@@ -20,10 +19,8 @@ pub const CLEAR_ROUNDS: usize = 32;
 /// the rest is rounding.
 pub const CLEAR_REL: f64 = 1e-9;
 
-/// A bounding-volume hierarchy over the faces of a mesh (median splits of the face centroids).
-///
-/// Nodes are stored depth first: a node's left child follows it, `right` is the right child; a
-/// leaf (`count > 0`) holds the faces `order[start..start + count]`.
+/// A bounding-volume hierarchy over the faces of a mesh ([`crate::bvh`] over the face boxes and
+/// centroids); a leaf's slots hold the faces `order[start..start + count]`.
 #[derive(Clone, Debug)]
 pub struct FaceTree {
     nodes: Vec<Node>,
@@ -38,15 +35,6 @@ pub struct FaceTree {
     spheres: Vec<(DVec3, f64)>,
     /// Slot of each face.
     slot_of: Vec<u32>,
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: DVec3,
-    hi: DVec3,
-    start: u32,
-    count: u32,
-    right: u32,
 }
 
 /// The point of the mesh nearest to a query.
@@ -65,12 +53,10 @@ impl FaceTree {
     /// Builds the tree of the triangles `triangles` over `positions` (indices must be valid).
     pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> Self {
         let corners: Vec<[DVec3; 3]> = triangles.iter().map(|t| t.map(|v| positions[v as usize])).collect();
+        let bounds: Vec<(DVec3, DVec3)> =
+            corners.iter().map(|c| (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))).collect();
         let mids: Vec<DVec3> = corners.iter().map(|c| (c[0] + c[1] + c[2]) / 3.0).collect();
-        let mut order: Vec<u32> = (0..corners.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * corners.len() / LEAF_SIZE + 1);
-        if !corners.is_empty() {
-            build(&corners, &mids, &mut order, 0, &mut nodes);
-        }
+        let (nodes, order) = bvh::build(&bounds, &mids);
         // Leaves read their corners in leaf order, for locality.
         let corners: Vec<[DVec3; 3]> = order.iter().map(|&f| corners[f as usize]).collect();
         let planes = corners
@@ -110,8 +96,8 @@ impl FaceTree {
         }
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index as usize];
-            let for_point = !point_hit && box_distance2(node, b) <= point2;
-            let for_segment = !segment_hit && box_distance2(node, mid) <= reach2;
+            let for_point = !point_hit && node.distance2(b) <= point2;
+            let for_segment = !segment_hit && node.distance2(mid) <= reach2;
             if !(for_point || for_segment) {
                 continue;
             }
@@ -154,7 +140,7 @@ impl FaceTree {
         }
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index as usize];
-            if box_distance2(node, mid) > reach2 {
+            if node.distance2(mid) > reach2 {
                 continue;
             }
             if node.count == 0 {
@@ -184,7 +170,7 @@ impl FaceTree {
         let mut bound2 = max_distance * max_distance;
         let mut stack = Stack::new((0u32, 0.0f64));
         if let Some(root) = self.nodes.first() {
-            stack.push((0, box_distance2(root, p)));
+            stack.push((0, root.distance2(p)));
         }
         while let Some((index, d2)) = stack.pop() {
             if d2 > bound2 {
@@ -215,8 +201,8 @@ impl FaceTree {
                 continue;
             }
             let (left, right) = (index + 1, node.right);
-            let dl = box_distance2(&self.nodes[left as usize], p);
-            let dr = box_distance2(&self.nodes[right as usize], p);
+            let dl = self.nodes[left as usize].distance2(p);
+            let dr = self.nodes[right as usize].distance2(p);
             // Nearer child last, so it is taken first and tightens the bound early.
             if dl <= dr {
                 stack.push((right, dr));
@@ -318,42 +304,6 @@ impl FaceTree {
     }
 }
 
-fn build(corners: &[[DVec3; 3]], mids: &[DVec3], ids: &mut [u32], start: usize, nodes: &mut Vec<Node>) -> u32 {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    let (mut mlo, mut mhi) = (lo, hi);
-    for &f in ids.iter() {
-        for c in corners[f as usize] {
-            lo = lo.min(c);
-            hi = hi.max(c);
-        }
-        mlo = mlo.min(mids[f as usize]);
-        mhi = mhi.max(mids[f as usize]);
-    }
-    let index = nodes.len() as u32;
-    nodes.push(Node { lo, hi, start: start as u32, count: 0, right: 0 });
-    if ids.len() <= LEAF_SIZE {
-        nodes[index as usize].count = ids.len() as u32;
-        return index;
-    }
-    let e = mhi - mlo;
-    let axis = if e.x >= e.y && e.x >= e.z {
-        0
-    } else if e.y >= e.z {
-        1
-    } else {
-        2
-    };
-    let half = ids.len() / 2;
-    ids.select_nth_unstable_by(half, |&a, &b| {
-        mids[a as usize][axis].total_cmp(&mids[b as usize][axis]).then(a.cmp(&b))
-    });
-    let (left, right) = ids.split_at_mut(half);
-    build(corners, mids, left, start, nodes);
-    let r = build(corners, mids, right, start + half, nodes);
-    nodes[index as usize].right = r;
-    index
-}
-
 /// A traversal stack without allocation. The tree is balanced (median splits), so its depth is
 /// at most 32 for any u32 face count, and a depth-first traversal keeps at most one pending
 /// sibling per level.
@@ -376,13 +326,6 @@ impl<T: Copy> Stack<T> {
         self.len = self.len.checked_sub(1)?;
         Some(self.items[self.len])
     }
-}
-
-/// Squared distance from `p` to the box of `node` (0 inside).
-#[inline]
-fn box_distance2(node: &Node, p: DVec3) -> f64 {
-    let d = (node.lo - p).max(p - node.hi).max(DVec3::ZERO);
-    d.dot(d)
 }
 
 /// Squared distance between segment `pq` and triangle `abc`: 0 when the segment pierces the
@@ -482,7 +425,7 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixtures;
+    use crate::fixtures::{self, SplitMix64};
 
     /// Brute force over every face: the oracle of the tree.
     fn nearest_brute(positions: &[DVec3], triangles: &[[u32; 3]], p: DVec3) -> (usize, f64) {
@@ -502,13 +445,8 @@ mod tests {
     fn the_tree_finds_the_brute_force_nearest_point_within_the_radius() {
         let mesh = fixtures::saddle_2_holes();
         let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
-        let mut state = 0x9e3779b97f4a7c15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = SplitMix64(1);
+        let mut next = || rng.unit();
         let (lo, hi) = crate::mesh::weld::bounding_box(&mesh.positions);
         let (mut found, mut missed) = (0, 0);
         for _ in 0..2000 {
@@ -537,13 +475,8 @@ mod tests {
     fn segment_queries_agree_with_dense_sampling() {
         let mesh = fixtures::saddle_2_holes();
         let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
-        let mut state = 0x2545f4914f6cdd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = SplitMix64(2);
+        let mut next = || rng.unit();
         let (lo, hi) = crate::mesh::weld::bounding_box(&mesh.positions);
         let (mut near, mut far) = (0, 0);
         for _ in 0..400 {
@@ -575,13 +508,8 @@ mod tests {
     fn one_traversal_for_a_move_answers_both_queries() {
         let mesh = fixtures::spherical_cap_hole();
         let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
-        let mut state = 0x9e3779b97f4a7c15u64 ^ 0xdead;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = SplitMix64(3);
+        let mut next = || rng.unit();
         let (lo, hi) = crate::mesh::weld::bounding_box(&mesh.positions);
         let mut seen = [[0usize; 2]; 2];
         for _ in 0..2000 {

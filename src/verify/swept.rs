@@ -3,6 +3,7 @@
 
 use super::capsule::Capsule;
 use super::VerifyError;
+use crate::bvh::{self, Node};
 use glam::DVec3;
 
 /// Capsules of radius R between consecutive ball centres of every pass, in path order, with a
@@ -25,26 +26,14 @@ pub struct SweptVolume {
 /// cell-R grid took 7 s for 100k samples under 87k segments). The hierarchy is traversed nearest
 /// box first and pruned by the distance bound, so it touches only the segments that matter.
 ///
-/// Nodes are stored depth first: a node's left child follows it, `right` is the right child;
-/// a leaf (`count > 0`) holds the slots `start..start + count` of `slots` (capsule copies in
-/// leaf order, for locality) and `ids` (their capsule ids).
+/// The tree is [`crate::bvh`]'s; a leaf's slots index `slots` (capsule copies in leaf order,
+/// for locality) and `ids` (their capsule ids).
 #[derive(Clone, Debug)]
 struct Bvh {
     nodes: Vec<Node>,
     slots: Vec<Capsule>,
     ids: Vec<u32>,
 }
-
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: DVec3,
-    hi: DVec3,
-    start: u32,
-    count: u32,
-    right: u32,
-}
-
-const LEAF_SIZE: usize = 4;
 
 /// What one probe of the swept volume found at a surface point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -146,58 +135,13 @@ pub fn count_runs(sorted_ids: &[u32], pass_of: &[u32]) -> u32 {
 }
 
 impl Bvh {
-    /// Median split of the segment midpoints along the longest axis of their bounds (ties by
-    /// id, so the tree is deterministic), down to leaves of at most [`LEAF_SIZE`].
     fn build(capsules: &[Capsule]) -> Self {
+        let bounds: Vec<(DVec3, DVec3)> = capsules.iter().map(|c| (c.a.min(c.b), c.a.max(c.b))).collect();
         let mids: Vec<DVec3> = capsules.iter().map(|c| 0.5 * (c.a + c.b)).collect();
-        let mut ids: Vec<u32> = (0..capsules.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * capsules.len() / LEAF_SIZE + 1);
-        Self::node(capsules, &mids, &mut ids, 0, &mut nodes);
+        let (nodes, ids) = bvh::build(&bounds, &mids);
         let slots = ids.iter().map(|&i| capsules[i as usize]).collect();
         Self { nodes, slots, ids }
     }
-
-    fn node(capsules: &[Capsule], mids: &[DVec3], ids: &mut [u32], start: usize, nodes: &mut Vec<Node>) -> u32 {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        let (mut mlo, mut mhi) = (lo, hi);
-        for &i in ids.iter() {
-            let c = &capsules[i as usize];
-            lo = lo.min(c.a).min(c.b);
-            hi = hi.max(c.a).max(c.b);
-            mlo = mlo.min(mids[i as usize]);
-            mhi = mhi.max(mids[i as usize]);
-        }
-        let index = nodes.len() as u32;
-        nodes.push(Node { lo, hi, start: start as u32, count: 0, right: 0 });
-        if ids.len() <= LEAF_SIZE {
-            nodes[index as usize].count = ids.len() as u32;
-            return index;
-        }
-        let e = mhi - mlo;
-        let axis = if e.x >= e.y && e.x >= e.z {
-            0
-        } else if e.y >= e.z {
-            1
-        } else {
-            2
-        };
-        let half = ids.len() / 2;
-        ids.select_nth_unstable_by(half, |&a, &b| {
-            mids[a as usize][axis].total_cmp(&mids[b as usize][axis]).then(a.cmp(&b))
-        });
-        let (left, right) = ids.split_at_mut(half);
-        Self::node(capsules, mids, left, start, nodes);
-        let r = Self::node(capsules, mids, right, start + half, nodes);
-        nodes[index as usize].right = r;
-        index
-    }
-}
-
-/// Squared distance from `p` to the box of `node` (0 inside).
-#[inline]
-fn box_distance2(node: &Node, p: DVec3) -> f64 {
-    let d = (node.lo - p).max(p - node.hi).max(DVec3::ZERO);
-    d.dot(d)
 }
 
 impl<'a> Prober<'a> {
@@ -220,7 +164,7 @@ impl<'a> Prober<'a> {
         self.covering.clear();
         self.stack.clear();
         let root = &bvh.nodes[0];
-        self.stack.push((0, box_distance2(root, p), box_distance2(root, q)));
+        self.stack.push((0, root.distance2(p), root.distance2(q)));
         while let Some((index, dp2, dq2)) = self.stack.pop() {
             let reach = r + best.min(max_t) + margin;
             if dp2 > reach * reach && dq2 > r2 {
@@ -251,8 +195,8 @@ impl<'a> Prober<'a> {
             // Nearer child last, so it is taken first and tightens the bound early.
             let (left, right) = (index + 1, node.right);
             let (nl, nr) = (&bvh.nodes[left as usize], &bvh.nodes[right as usize]);
-            let (lp, rp) = (box_distance2(nl, p), box_distance2(nr, p));
-            let (lq, rq) = (box_distance2(nl, q), box_distance2(nr, q));
+            let (lp, rp) = (nl.distance2(p), nr.distance2(p));
+            let (lq, rq) = (nl.distance2(q), nr.distance2(q));
             if lp <= rp {
                 self.stack.push((right, rp, rq));
                 self.stack.push((left, lp, lq));
