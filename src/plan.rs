@@ -21,7 +21,7 @@ use crate::spacing::{self, Rings, SpacingError, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
 use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::sync::OnceLock;
 
@@ -222,19 +222,8 @@ impl Planner {
         stage(0);
         let t = now();
         let origin_options = OriginOptions { radius_mm: r, choice: options.origin, ..OriginOptions::default() };
-        let origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
-        let map = self.solver.map(origin.pole)?;
+        let mut origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
         timings.origin = now() - t;
-
-        stage(1);
-        let t = now();
-        let spacing_options =
-            SpacingOptions { radius_mm: r, scallop_mm: options.scallop_mm, ..SpacingOptions::default() };
-        let rings = spacing::spacing(&self.surface, &map, &spacing_options)?;
-        timings.spacing = now() - t;
-
-        stage(2);
-        let t = now();
         let spiral_options = SpiralOptions {
             direction: options.direction,
             cut: options.cut,
@@ -242,8 +231,39 @@ impl Planner {
             radius_mm: r,
             ..SpiralOptions::default()
         };
-        let spiral = spiral::spiral(&self.surface, &map, &rings, &spiral_options)?;
-        timings.spiral = now() - t;
+        // `auto` promises a path: when the P1 map cannot carry one from the best pole, the next
+        // best poles the search saw are tried (reported as rejected).
+        let mut alternatives = match options.origin {
+            OriginChoice::Auto => origin.alternatives(FALLBACK_SEPARATION * self.domain_diagonal(), MAX_FALLBACKS),
+            _ => Vec::new(),
+        }
+        .into_iter();
+        let mut rejected = Vec::new();
+        let (map, rings, spiral) = loop {
+            match self.rings_and_spiral(&origin, options, &spiral_options, &mut stage, &mut timings, now) {
+                Ok(done) => break done,
+                Err(e) if e.depends_on_pole() => {
+                    let Some(pole) = alternatives.next() else { return Err(e) };
+                    rejected.push(RejectedPole {
+                        pole_uv: origin.pole.to_array(),
+                        e_min: origin.energy.e_min,
+                        reason: e.to_string(),
+                    });
+                    let t = now();
+                    let choice = OriginChoice::Plane(pole);
+                    let next = origin::find_origin(
+                        &self.surface,
+                        &self.domain,
+                        &self.solver,
+                        &OriginOptions { choice, ..origin_options.clone() },
+                    )?;
+                    let trace = std::mem::take(&mut origin.trace);
+                    origin = Origin { evaluations: origin.evaluations + next.evaluations, trace, ..next };
+                    timings.origin += now() - t;
+                }
+                Err(e) => return Err(e),
+            }
+        };
 
         stage(3);
         let t = now();
@@ -329,9 +349,71 @@ impl Planner {
             + timings.verify;
         stage(6);
 
-        let report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
+        let mut report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
+        report.origin.rejected = rejected;
         Ok(Plan { origin, map, rings, spiral, toolpath, path, gcode, report })
     }
+
+    /// The slit map of `origin`'s pole, its rings and the spiral through them.
+    fn rings_and_spiral(
+        &self,
+        origin: &Origin,
+        options: &PlanOptions,
+        spiral_options: &SpiralOptions,
+        stage: &mut dyn FnMut(usize),
+        timings: &mut Timings,
+        now: &dyn Fn() -> f64,
+    ) -> Result<(SlitMap, Rings, Spiral), PlanError> {
+        stage(1);
+        let t = now();
+        let map = self.solver.map(origin.pole)?;
+        let spacing_options = SpacingOptions {
+            radius_mm: options.radius_mm,
+            scallop_mm: options.scallop_mm,
+            ..SpacingOptions::default()
+        };
+        let rings = spacing::spacing(&self.surface, &map, &spacing_options);
+        timings.spacing += now() - t;
+        let rings = rings?;
+        stage(2);
+        let t = now();
+        let spiral = spiral::spiral(&self.surface, &map, &rings, spiral_options);
+        timings.spiral += now() - t;
+        Ok((map, rings, spiral?))
+    }
+
+    /// Bounding-box diagonal of the flattened domain.
+    fn domain_diagonal(&self) -> f64 {
+        let (lo, hi) = self.domain.positions.iter().fold((DVec2::MAX, DVec2::MIN), |(a, b), &p| (a.min(p), b.max(p)));
+        (hi - lo).length()
+    }
+}
+
+/// `auto` tries at most this many other poles when a path cannot be built from the best one.
+pub const MAX_FALLBACKS: usize = 3;
+/// ... each at least this fraction of the flattened domain's diagonal from the poles tried.
+pub const FALLBACK_SEPARATION: f64 = 0.05;
+
+impl PlanError {
+    /// Errors a different pole may avoid: the P1 map cannot carry a ring or the spiral there
+    /// (a lift outside the image, a jump across overlapping image triangles, a bridge with no
+    /// room between slits, a band no ring can close).
+    pub fn depends_on_pole(&self) -> bool {
+        matches!(
+            self,
+            PlanError::Spiral(
+                SpiralError::Discontinuous { .. } | SpiralError::Lift { .. } | SpiralError::Blocked { .. }
+            ) | PlanError::Spacing(SpacingError::Lift { .. } | SpacingError::NoProgress { .. })
+        )
+    }
+}
+
+/// A pole `auto` chose first and gave up, with why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RejectedPole {
+    pub pole_uv: [f64; 2],
+    pub e_min: f64,
+    pub reason: String,
 }
 
 /// How deep a ball placed along the interpolated vertex normal can dip below the plane of the
@@ -458,6 +540,9 @@ pub struct OriginReport {
     pub e_min_centroid: f64,
     pub uniformity: f64,
     pub evaluations: usize,
+    /// Poles `auto` chose first and could not plan from (see [`MAX_FALLBACKS`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rejected: Vec<RejectedPole>,
 }
 
 /// The plan report (`slitpath plan --report`, and what the page shows).
@@ -513,6 +598,7 @@ impl PlanReport {
                 e_min_centroid: origin.centroid_energy.e_min,
                 uniformity: origin.energy.uniformity,
                 evaluations: origin.evaluations,
+                rejected: Vec::new(),
             },
             rings: rings.rings.len(),
             ring_radii: rings.radii(),

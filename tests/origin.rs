@@ -316,3 +316,30 @@ fn shared_meshes_search_finishes_below_the_centroid() {
         assert!(o.energy.uniformity >= 1.0 - 1e-12, "{name}");
     }
 }
+
+#[test]
+fn the_alternatives_are_the_next_best_poles_the_search_saw_and_far_apart() {
+    // Issue 3 (plate_holes): `auto` plans from these when the best pole's path cannot be built.
+    let p = part(&fixtures::freeform_4_holes());
+    let o = origin(&p, &OriginOptions::default()).unwrap();
+    let (lo, hi) = p.domain.positions.iter().fold((DVec2::MAX, DVec2::MIN), |(a, b), &q| (a.min(q), b.max(q)));
+    let sep = 0.05 * (hi - lo).length();
+    let alt = o.alternatives(sep, 3);
+    assert!(!alt.is_empty(), "a search of {} evaluations saw other poles", o.evaluations);
+    let e = |q: DVec2| o.trace.iter().find(|t| t.0 == q).expect("a pole of the trace").1;
+    let mut poles = vec![o.pole];
+    for (i, &q) in alt.iter().enumerate() {
+        assert!(e(q) >= o.energy.e_min, "alternative {i} beats the chosen pole");
+        assert!(i == 0 || e(q) >= e(alt[i - 1]), "not in order of E_min");
+        assert!(poles.iter().all(|&r| r.distance(q) >= sep), "alternative {i} is within {sep} of another pole");
+        poles.push(q);
+    }
+    // Every pole of the trace that is left out is either worse than the last alternative or too
+    // close to a kept one.
+    let last = e(*alt.last().unwrap());
+    for &(q, eq) in &o.trace {
+        if !poles.contains(&q) && eq < last {
+            assert!(poles.iter().any(|&r| r.distance(q) < sep), "pole {q} (E {eq}) was skipped");
+        }
+    }
+}

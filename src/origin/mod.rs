@@ -143,6 +143,27 @@ pub struct Origin {
     pub trace: Vec<(DVec2, f64)>,
 }
 
+impl Origin {
+    /// Other poles the search evaluated, lowest E_min first, each at least `separation` (in the
+    /// flattened plane) from the chosen pole and from one another; at most `count`. Where
+    /// [`OriginChoice::Auto`] turns when the P1 map cannot carry a path from the chosen pole.
+    pub fn alternatives(&self, separation: f64, count: usize) -> Vec<DVec2> {
+        let mut order: Vec<usize> = (0..self.trace.len()).collect();
+        order.sort_by(|&a, &b| self.trace[a].1.total_cmp(&self.trace[b].1).then(a.cmp(&b)));
+        let mut out: Vec<DVec2> = Vec::new();
+        for i in order {
+            let p = self.trace[i].0;
+            if p.distance(self.pole) >= separation && out.iter().all(|q| q.distance(p) >= separation) {
+                out.push(p);
+                if out.len() == count {
+                    break;
+                }
+            }
+        }
+        out
+    }
+}
+
 fn ser_v2<S: serde::Serializer>(v: &DVec2, s: S) -> Result<S::Ok, S::Error> {
     v.to_array().serialize(s)
 }
