@@ -25,6 +25,7 @@ pub mod bench;
 mod bvh;
 pub mod fixtures;
 pub mod flatten;
+mod flip;
 pub mod gcode;
 pub mod linalg;
 pub mod mesh;

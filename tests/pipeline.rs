@@ -266,3 +266,31 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
         assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
     }
 }
+
+#[test]
+fn issue_3_auto_plans_plate_holes_from_the_next_pole_when_the_best_one_cannot_carry_a_path() {
+    // plate_holes' flat face is remeshed (it has needles); the best pole by E_min then lies next
+    // to a hole, where the P1 map's images overlap and the spiral jumps 4 mm. `auto` must still
+    // give a path, from the next best pole, and say which pole it gave up and why.
+    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join("plate_holes.stl")) else {
+        eprintln!("skipped: plate_holes.stl is absent");
+        return;
+    };
+    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
+    let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
+    let r = (hi - lo).length() / 60.0;
+    let p = Planner::new(out, &|| 0.0).expect("planner");
+    let options = PlanOptions { radius_mm: r, scallop_mm: r / 150.0, verify_samples: 20_000, ..PlanOptions::default() };
+    let pl = plan(&p, &options);
+    let rejected = &pl.report.origin.rejected;
+    println!("plate_holes: origin {:?}, rejected {rejected:?}", pl.report.origin.pole_uv);
+    assert!(rejected.len() <= slitpath::plan::MAX_FALLBACKS);
+    for rj in rejected {
+        assert!(rj.reason.starts_with("spiral:") || rj.reason.starts_with("spacing:"), "{}", rj.reason);
+        assert!(rj.e_min <= pl.report.origin.e_min, "a rejected pole was worse than the one kept");
+    }
+    assert_eq!(pl.toolpath.stats.retractions, 1);
+    let v = pl.verification().expect("verified");
+    assert_eq!(v.gouges, 0);
+    assert!(v.uncovered_fraction <= 1e-3, "uncovered {}", v.uncovered_fraction);
+}

@@ -32,6 +32,7 @@
 pub mod extract;
 pub mod geometry;
 pub mod nearest;
+pub mod quality;
 pub mod refine;
 pub mod stl;
 pub mod topology;

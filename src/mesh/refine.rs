@@ -18,6 +18,12 @@
 //! slit domain, where its straight image could not follow the map (see
 //! [`RefineOptions::max_edge_fraction`]).
 //!
+//! Flat regions: then every edge between two coplanar faces that is not locally Delaunay is
+//! flipped ([`flip_coplanar`]), and flat regions that still hold needles are remeshed
+//! ([`super::quality`], Delaunay refinement). Both are exact on a plane. CAD parts are flat faces
+//! tessellated as fans, and the long-edge bisection leaves needles there whose images fold under
+//! any P1 map (featuretype folded 226 faces at its centroid pole, wheel_in_box 19).
+//!
 //! Ears: a face with all three corners on the boundary (typically the triangle at a corner of the
 //! outer loop) has its whole image on |w| = 1 (or on a slit) in the log-polar strip the later
 //! stages locate points in, a sliver of zero height: no ring can be tested against its interior
@@ -25,8 +31,8 @@
 //! too, so every face has a corner off the boundary.
 //!
 //! Invariants: the refined surface is the same piecewise-flat surface — every child face lies in
-//! its parent's plane, keeps its parent's normal and curvature tensor, and faces keep their
-//! winding. Original vertices keep their indices (new ones are appended), boundary loops gain
+//! its parent's plane, keeps its parent's normal and curvature tensor (a remeshed face: those of
+//! the face it was cut from), and faces keep their winding. Original vertices keep their indices (new ones are appended), boundary loops gain
 //! the midpoints of split boundary edges in order. Deterministic: splits are numbered in edge
 //! order.
 
@@ -52,11 +58,27 @@ pub struct RefineOptions {
     pub max_rounds: usize,
     /// Split the interior edges of faces with all three corners on the boundary. Default true.
     pub split_ears: bool,
+    /// After the long-edge splits, flip every edge between two coplanar faces that is not
+    /// locally Delaunay (see [`flip_coplanar`]). Default true: CAD parts are flat regions
+    /// tessellated as fans, and the splits leave needles whose images fold under any P1 map
+    /// (featuretype: 226 folded faces at the centroid pole without).
+    pub coplanar_flips: bool,
+    /// Then refine every flat region until its triangles have no angle below this many degrees
+    /// (Delaunay refinement, [`super::quality`]), `None` to skip. Default 25°. Needs
+    /// `coplanar_flips`.
+    pub flat_min_angle_deg: Option<f64>,
 }
 
 impl Default for RefineOptions {
     fn default() -> Self {
-        Self { max_edge_fraction: Some(1.0 / 40.0), min_hole_valence: 6, max_rounds: 1, split_ears: true }
+        Self {
+            max_edge_fraction: Some(1.0 / 40.0),
+            min_hole_valence: 6,
+            max_rounds: 1,
+            split_ears: true,
+            coplanar_flips: true,
+            flat_min_angle_deg: Some(20.0),
+        }
     }
 }
 
@@ -79,6 +101,12 @@ pub fn refine_hole_rims(surface: &Surface, options: &RefineOptions) -> Surface {
                 break;
             }
             s = split_edges(&s, &edges);
+        }
+    }
+    if options.coplanar_flips {
+        s = flip_coplanar(&s);
+        if let Some(angle) = options.flat_min_angle_deg {
+            s = super::quality::refine_flat_regions(&s, angle);
         }
     }
     for _ in 0..options.max_rounds {
@@ -197,6 +225,61 @@ fn face_counts(n: usize, triangles: &[[u32; 3]]) -> Vec<usize> {
         }
     }
     count
+}
+
+/// Coplanarity tolerances of [`flip_coplanar`]: the two faces' unit normals agree to
+/// 1 − cos ≤ `COPLANAR_COS`, and the far corner lies within `COPLANAR_REL` × the shared edge's
+/// length of the other face's plane (CAD flats are coplanar to rounding).
+const COPLANAR_COS: f64 = 1e-12;
+const COPLANAR_REL: f64 = 1e-9;
+
+/// Faces (a, b, c) and (b, a, d) lie in one plane, facing the same way (within
+/// [`COPLANAR_COS`] and [`COPLANAR_REL`]).
+pub(super) fn coplanar(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> bool {
+    let n1 = (b - a).cross(c - a);
+    let n2 = (a - b).cross(d - b);
+    let (l1, l2) = (n1.length(), n2.length());
+    l1 > 0.0
+        && l2 > 0.0
+        && n1.dot(n2) >= (1.0 - COPLANAR_COS) * l1 * l2
+        && (d - a).dot(n1).abs() <= COPLANAR_REL * l1 * (b - a).length()
+}
+
+/// `s` with every edge between two coplanar faces flipped while it is not locally Delaunay
+/// (the angles opposite it sum to more than π) and the flip keeps both faces' winding: the
+/// Delaunay triangulation of each flat region of the part, on the same vertices. Exact — a flip
+/// inside a plane changes no point of the surface — so positions, loops and vertex normals are
+/// kept (the angle a flat region makes at a vertex does not change); face slots keep their
+/// normal and curvature tensor (both faces of a flip lie in one plane).
+pub fn flip_coplanar(s: &Surface) -> Surface {
+    let p = |v: u32| s.positions[v as usize];
+    let (triangles, flips) = crate::flip::lawson(&s.triangles, |a, b, c, d| {
+        let (a, b, c, d) = (p(a), p(b), p(c), p(d));
+        if !coplanar(a, b, c, d) {
+            return false;
+        }
+        let cot = |o: DVec3, u: DVec3, v: DVec3| (u - o).dot(v - o) / (u - o).cross(v - o).length();
+        let sum = cot(c, a, b) + cot(d, a, b);
+        if sum.is_nan() || sum >= -1e-9 {
+            return false;
+        }
+        // Both new faces wound like the old ones, with some area (the quad is strictly convex).
+        let n1 = (b - a).cross(c - a);
+        let l1 = n1.length();
+        let floor = 1e-9 * l1;
+        (a - c).cross(d - c).dot(n1) / l1 > floor && (b - d).cross(c - d).dot(n1) / l1 > floor
+    });
+    if flips == 0 {
+        return s.clone();
+    }
+    let face_areas = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(p);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect();
+    Surface { triangles, face_areas, ..s.clone() }
 }
 
 /// Splits `edges` (sorted) at their midpoints with a conforming red–green subdivision.
@@ -349,9 +432,37 @@ mod tests {
     }
 
     #[test]
+    fn coplanar_faces_get_the_delaunay_diagonal_and_creased_ones_keep_theirs() {
+        // A thin rhombus cut along its long diagonal (both opposite angles near 180°), flat and
+        // then folded along that diagonal.
+        for (lift, flips) in [(0.0, true), (0.05, false)] {
+            let positions = vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(4.0, 0.0, 0.0),
+                DVec3::new(2.0, 0.3, lift),
+                DVec3::new(2.0, -0.3, lift),
+            ];
+            let tri = mesh::TriMesh { positions, triangles: vec![[0, 1, 2], [1, 0, 3]] };
+            let s = mesh::from_triangles(&tri, &MeshOptions::default()).expect("a valid rhombus").surface;
+            let r = flip_coplanar(&s);
+            let has_long = r.triangles.iter().any(|t| t.contains(&0) && t.contains(&1));
+            assert_eq!(has_long, !flips, "lift {lift}");
+            assert_eq!(r.positions, s.positions);
+            assert_eq!(r.loops, s.loops);
+            for (t, n) in r.triangles.iter().zip(&r.face_normals) {
+                let [a, b, c] = t.map(|v| r.positions[v as usize]);
+                assert!((b - a).cross(c - a).normalize().dot(*n) > 1.0 - 1e-6, "lift {lift}: {t:?}");
+            }
+        }
+    }
+
+    #[test]
     fn a_surface_without_holes_is_left_alone() {
+        // The rim refinement alone (the unit disk is flat: the flat-region passes are tested in
+        // `quality`).
         let surface = load("unit_disk");
-        let r = refine_hole_rims(&surface, &RefineOptions { max_edge_fraction: None, ..RefineOptions::default() });
+        let rims_only = RefineOptions { max_edge_fraction: None, coplanar_flips: false, ..RefineOptions::default() };
+        let r = refine_hole_rims(&surface, &rims_only);
         assert_eq!(r.triangles, surface.triangles);
     }
 

@@ -16,60 +16,12 @@
 //! Deterministic: edges are visited in a fixed order.
 
 use glam::DVec2;
-use std::collections::HashMap;
 
 /// The Delaunay triangulation of `positions` reached by flipping interior edges of `triangles`
 /// (same vertices, same boundary edges, counter-clockwise), and the number of flips.
 pub fn delaunay_flip(positions: &[DVec2], triangles: &[[u32; 3]]) -> (Vec<[u32; 3]>, usize) {
-    let mut tris = triangles.to_vec();
-    // Directed half-edge a → b ↦ (face, corner of a).
-    let mut half: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * tris.len());
-    for (f, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            half.insert((t[k], t[(k + 1) % 3]), f);
-        }
-    }
-    let mut stack: Vec<(u32, u32)> = Vec::with_capacity(3 * tris.len() / 2);
-    for t in &tris {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if a < b && half.contains_key(&(b, a)) {
-                stack.push((a, b));
-            }
-        }
-    }
-    stack.reverse();
-    let mut flips = 0;
-    let budget = 50 * tris.len() + 1000;
-    while let Some((a, b)) = stack.pop() {
-        let (Some(&f1), Some(&f2)) = (half.get(&(a, b)), half.get(&(b, a))) else { continue };
-        let c = third(&tris[f1], a, b);
-        let d = third(&tris[f2], b, a);
-        let p = |v: u32| positions[v as usize];
-        if !needs_flip(p(a), p(b), p(c), p(d)) || flips >= budget {
-            continue;
-        }
-        // f1 = (a, b, c), f2 = (b, a, d)  →  f1 = (c, a, d), f2 = (d, b, c).
-        half.remove(&(a, b));
-        half.remove(&(b, a));
-        tris[f1] = [c, a, d];
-        tris[f2] = [d, b, c];
-        half.insert((a, d), f1);
-        half.insert((d, c), f1);
-        half.insert((b, c), f2);
-        half.insert((c, d), f2);
-        flips += 1;
-        for (u, v) in [(a, c), (c, b), (b, d), (d, a)] {
-            if half.contains_key(&(u, v)) && half.contains_key(&(v, u)) {
-                stack.push((u.min(v), u.max(v)));
-            }
-        }
-    }
-    (tris, flips)
-}
-
-fn third(t: &[u32; 3], a: u32, b: u32) -> u32 {
-    t.iter().copied().find(|&v| v != a && v != b).unwrap_or(t[0])
+    let p = |v: u32| positions[v as usize];
+    crate::flip::lawson(triangles, |a, b, c, d| needs_flip(p(a), p(b), p(c), p(d)))
 }
 
 /// Edge a–b with c on its left and d on its right is not locally Delaunay: the angles at c and

@@ -58,7 +58,8 @@
 //!   |w| = 1 thinner than the P1 error.
 //!
 //! Three measures remove the first two: the planner refines hole rims so every hole vertex has
-//! enough faces to open by 2π, and splits ears (`mesh::refine`, pole-independent); both Laplacians are assembled
+//! enough faces to open by 2π, splits ears, and remeshes flat regions full of needles
+//! (`mesh::refine`, `mesh::quality`, pole-independent); both Laplacians are assembled
 //! on the Delaunay triangulation of the same vertices (`delaunay`: non-negative cotan weights,
 //! so the discrete maximum principle holds for h); and `untangle` moves the vertices of the few
 //! remaining folded triangles by the least amount that unfolds them, boundary vertices along
