@@ -99,6 +99,8 @@ export interface PlanReport {
     e_min_centroid: number;
     uniformity: number;
     evaluations: number;
+    /** Poles `auto` chose first but could not plan from (the next best one was used). */
+    rejected?: { pole_uv: Vec2; e_min: number; reason: string }[];
   };
   rings: unknown;
   path: {

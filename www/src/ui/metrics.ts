@@ -16,6 +16,7 @@ function rows(plan: PlanResult, limit: number): Row[] {
   const { path, verify, origin } = report;
   const gain = origin.e_min_centroid > 0 ? 1 - origin.e_min / origin.e_min_centroid : 0;
   const minutes = path.time_min;
+  const rejected = origin.rejected?.length ?? 0;
   return [
     ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
     ["metric-length", "Path length", `${n1.format(path.length_mm)} mm (${n0.format(path.points)} points)`],
@@ -42,7 +43,13 @@ function rows(plan: PlanResult, limit: number): Row[] {
       `${n0.format(report.fold_compromises)} / ${n0.format(report.crease_compromises)}`,
       report.fold_compromises + report.crease_compromises > 0,
     ],
-    ["metric-origin", "Origin", `${origin.mode}, pole (${origin.pole_uv.map((v) => n3.format(v)).join(", ")})`],
+    [
+      "metric-origin",
+      "Origin",
+      `${origin.mode}, pole (${origin.pole_uv.map((v) => n3.format(v)).join(", ")})` +
+        (rejected > 0 ? ` — ${rejected} better pole${rejected > 1 ? "s" : ""} gave no path` : ""),
+      rejected > 0,
+    ],
     ["metric-energy", "E_min (this pole)", `${n3.format(origin.e_min)} (uniformity ${n3.format(origin.uniformity)})`],
     [
       "metric-centroid",
