@@ -102,7 +102,7 @@ pub enum SpiralError {
     Lift { rho: f64, theta: f64 },
     #[error("the bridge from ring {ring} cannot clear the slits between radius {from} and {to}")]
     Blocked { ring: usize, from: f64, to: f64 },
-    #[error("the path jumps {gap_mm} mm at radius {rho}, angle {theta} of the slit domain: the curve is discontinuous on the surface")]
+    #[error("the path jumps {gap_mm} mm at radius {rho}, angle {theta} of the slit domain: the slit map cannot carry a continuous path from this pole; choose another one (origin auto tries several)")]
     Discontinuous { rho: f64, theta: f64, gap_mm: f64 },
 }
 
