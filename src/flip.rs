@@ -68,6 +68,6 @@ pub(crate) fn lawson(
 }
 
 /// The corner of `t` that is neither a nor b.
-fn third(t: &[u32; 3], a: u32, b: u32) -> u32 {
+pub(crate) fn third(t: &[u32; 3], a: u32, b: u32) -> u32 {
     t.iter().copied().find(|&v| v != a && v != b).unwrap_or(t[0])
 }

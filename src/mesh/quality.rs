@@ -35,6 +35,7 @@
 //! only. At most [`MAX_NEW_PER_FACE`] new vertices per face of a flat region.
 
 use super::Surface;
+use crate::flip::third;
 use glam::{DVec2, DVec3};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
@@ -240,10 +241,6 @@ fn min_sin([a, b, c]: [DVec3; 3]) -> f64 {
     let k = (0..3).min_by(|&i, &j| l[i].total_cmp(&l[j])).unwrap_or(0);
     let area2 = (b - a).cross(c - a).length();
     area2 / (l[(k + 1) % 3] * l[(k + 2) % 3])
-}
-
-fn third(t: &[u32; 3], a: u32, b: u32) -> u32 {
-    t.iter().copied().find(|&v| v != a && v != b).unwrap_or(t[0])
 }
 
 fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
@@ -470,30 +467,7 @@ impl Refiner {
     }
 
     fn into_surface(self, s: &Surface) -> Surface {
-        let expand = |a: u32, b: u32, out: &mut Vec<u32>| {
-            // The split points of edge a → b in order, a included, b not.
-            let mut stack = vec![(a, b)];
-            while let Some((u, v)) = stack.pop() {
-                match self.split.get(&(u.min(v), u.max(v))) {
-                    Some(&m) => {
-                        stack.push((m, v));
-                        stack.push((u, m));
-                    }
-                    None => out.push(u),
-                }
-            }
-        };
-        let loops = s
-            .loops
-            .iter()
-            .map(|l| {
-                let mut out = Vec::with_capacity(l.len());
-                for (i, &a) in l.iter().enumerate() {
-                    expand(a, l[(i + 1) % l.len()], &mut out);
-                }
-                out
-            })
-            .collect();
+        let loops = super::refine::loops_through(&s.loops, &self.split);
         let face_areas = self
             .tris
             .iter()

@@ -301,20 +301,7 @@ fn split_edges(s: &Surface, edges: &[Edge]) -> Surface {
             parent.push(f);
         }
     }
-    let loops = s
-        .loops
-        .iter()
-        .map(|l| {
-            let mut out = Vec::with_capacity(l.len());
-            for (i, &a) in l.iter().enumerate() {
-                out.push(a);
-                if let Some(&m) = mid.get(&key(a, l[(i + 1) % l.len()])) {
-                    out.push(m);
-                }
-            }
-            out
-        })
-        .collect();
+    let loops = loops_through(&s.loops, &mid);
     let face_areas = triangles
         .iter()
         .map(|t: &[u32; 3]| {
@@ -331,6 +318,32 @@ fn split_edges(s: &Surface, edges: &[Edge]) -> Surface {
         loops,
         vertex_normals,
     }
+}
+
+/// `loops` with the points their edges were split at (`split`: sorted edge ↦ its split point,
+/// which may itself be split again) inserted in order.
+pub(super) fn loops_through(loops: &[Vec<u32>], split: &BTreeMap<Edge, u32>) -> Vec<Vec<u32>> {
+    let mut stack = Vec::new();
+    loops
+        .iter()
+        .map(|l| {
+            let mut out = Vec::with_capacity(l.len());
+            for (i, &a) in l.iter().enumerate() {
+                // Edge a → b: its points in order, a included, b not.
+                stack.push((a, l[(i + 1) % l.len()]));
+                while let Some((u, v)) = stack.pop() {
+                    match split.get(&key(u, v)) {
+                        Some(&m) => {
+                            stack.push((m, v));
+                            stack.push((u, m));
+                        }
+                        None => out.push(u),
+                    }
+                }
+            }
+            out
+        })
+        .collect()
 }
 
 /// The children of face `t` (corners `t[k]`, `m[k]` the midpoint of edge `t[k] → t[k+1]` when it
