@@ -93,7 +93,8 @@ struct Refiner {
     tris: Vec<[u32; 3]>,
     /// Patch of each face; `None` for faces in no flat region (never touched).
     patch: Vec<Option<u32>>,
-    /// The original face each face was cut from.
+    /// An original face of each face's flat region (its slot's, through splits and flips): where
+    /// its normal and curvature tensor come from.
     origin: Vec<u32>,
     planes: Vec<Plane>,
     half: HashMap<(u32, u32), usize>,
