@@ -31,6 +31,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod num;
 pub mod origin;
+mod par;
 pub mod plan;
 pub mod slitmap;
 pub mod spacing;

@@ -192,6 +192,24 @@ fn reruns_and_a_second_planner_give_byte_identical_gcode() {
     assert!(a == b, "G-code differs between runs");
 }
 
+/// Natively the stages spread work over threads; the plan must not depend on how many.
+#[test]
+fn the_plan_is_the_same_on_one_thread_and_on_three() {
+    let p = planner("freeform_4_holes");
+    let options = PlanOptions { verify_samples: 20_000, ..PlanOptions::default() };
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
+        let pl = pool.install(|| plan(&p, &options));
+        let v = pl.verification().expect("verified");
+        (pl.gcode.clone(), v.max_scallop_mm, v.vertex_scallop_mm.clone(), pl.report.origin.e_min)
+    };
+    let (one, three) = (on(1), on(3));
+    assert!(one.0 == three.0, "G-code differs between 1 and 3 threads");
+    assert_eq!(one.1.to_bits(), three.1.to_bits());
+    assert!(one.2 == three.2, "per-vertex scallops differ");
+    assert_eq!(one.3.to_bits(), three.3.to_bits());
+}
+
 #[test]
 fn a_smaller_scallop_gives_more_rings_and_bad_options_are_refused() {
     let p = planner("plate_3_holes");

@@ -46,6 +46,9 @@ pub(crate) struct Search<'s, 'a> {
     pub best: Option<(DVec2, Energy)>,
     /// Best point of each hole's offset curve, once computed (`None` inside: no feasible point).
     offsets: Vec<Option<Option<(DVec2, f64)>>>,
+    /// Energies computed ahead, in parallel, of the sequential search asking for them (see
+    /// [`Search::prefetch`]).
+    ahead: Vec<(DVec2, Option<Energy>)>,
 }
 
 impl<'s, 'a> Search<'s, 'a> {
@@ -60,6 +63,7 @@ impl<'s, 'a> Search<'s, 'a> {
             trace: Vec::new(),
             best: None,
             offsets: vec![None; domain.loops.len()],
+            ahead: Vec::new(),
         }
     }
 
@@ -82,13 +86,35 @@ impl<'s, 'a> Search<'s, 'a> {
             return None;
         }
         self.evaluations += 1;
-        let energy = self.ev.evaluate(p).ok()?;
+        let energy = match self.ahead.iter().position(|(q, _)| *q == p) {
+            Some(k) => self.ahead.swap_remove(k).1,
+            None => self.ev.evaluate(p).ok(),
+        }?;
         let e = energy.e_min;
         self.trace.push((p, e));
         if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
             self.best = Some((p, energy));
         }
         Some(e)
+    }
+
+    /// Evaluates the poles `points` that the search is about to ask for (or may), in parallel
+    /// when there are threads (the wasm build has none: nothing is done there). The search's
+    /// course is the sequential one whatever is fetched: [`Search::eval`] only takes the value
+    /// from here instead of computing it. Unused values cost a thread's idle time, no more.
+    fn prefetch(&mut self, points: &[DVec2]) {
+        if crate::par::threads() < 2 {
+            return;
+        }
+        let room = self.budget.saturating_sub(self.evaluations);
+        let todo: Vec<DVec2> =
+            points.iter().copied().filter(|&p| !self.ahead.iter().any(|(q, _)| *q == p)).take(room).collect();
+        if todo.len() < 2 {
+            return; // one point gains nothing from a thread
+        }
+        let ev = self.ev;
+        let energies = crate::par::map(todo.len(), || (), |_, i| ev.evaluate(todo[i]).ok());
+        self.ahead.extend(todo.into_iter().zip(energies));
     }
 
     /// Records an energy evaluated outside the search (the centroid's).
@@ -98,6 +124,10 @@ impl<'s, 'a> Search<'s, 'a> {
         if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
             self.best = Some((p, energy));
         }
+    }
+
+    fn is_disk(&self, p: DVec2) -> bool {
+        matches!(self.region(p), Region::Disk)
     }
 
     /// E_min at `p` if `p` is a feasible disk pole.
@@ -111,10 +141,12 @@ impl<'s, 'a> Search<'s, 'a> {
     /// The whole search after the centroid: every hole's annulus, then descents from `starts`
     /// points (the centroid first).
     pub fn run(&mut self, centroid: DVec2, centroid_e: f64, starts: usize) {
-        for j in 1..self.domain.loops.len() {
-            self.eval(self.ev.solver().canonical_hole_pole(j));
-        }
+        let holes: Vec<DVec2> = (1..self.domain.loops.len()).map(|j| self.ev.solver().canonical_hole_pole(j)).collect();
         let starts = self.starts(centroid, starts);
+        self.prefetch(&[&holes[..], &starts[1..]].concat());
+        for &p in &holes {
+            self.eval(p);
+        }
         let mut ends: Vec<(DVec2, f64)> = Vec::new();
         for (k, s) in starts.into_iter().enumerate() {
             let e = if k == 0 { Some(centroid_e) } else { self.eval(s) };
@@ -184,6 +216,9 @@ impl<'s, 'a> Search<'s, 'a> {
                 if step < min_step || self.exhausted() {
                     break 'outer;
                 }
+                // This step and the halved one, should it fail.
+                let tries = [step, 0.5 * step].map(|s| p + dir * s);
+                self.prefetch(&tries.into_iter().filter(|&q| self.is_disk(q)).collect::<Vec<_>>());
                 let q = p + dir * step;
                 let next = match self.region(q) {
                     Region::Disk => self.eval(q).map(|eq| (q, eq)),
@@ -208,6 +243,8 @@ impl<'s, 'a> Search<'s, 'a> {
     /// infeasible; a component is 0 when both are.
     fn gradient(&mut self, p: DVec2, e: f64, h: f64) -> Option<DVec2> {
         let mut g = DVec2::ZERO;
+        let forward = [p + DVec2::X * h, p + DVec2::Y * h];
+        self.prefetch(&forward.into_iter().filter(|&q| self.is_disk(q)).collect::<Vec<_>>());
         for (k, u) in [DVec2::X, DVec2::Y].into_iter().enumerate() {
             let d = if let Some(ef) = self.eval_disk(p + u * h) {
                 (ef - e) / h
@@ -251,6 +288,9 @@ impl<'s, 'a> Search<'s, 'a> {
             let normal = (b - a).perp() / len;
             points.push((on, normal));
         }
+        let first_offset = |&(on, normal): &(DVec2, DVec2)| on + normal * (OFFSET * self.scale);
+        let likely: Vec<DVec2> = points.iter().map(first_offset).filter(|&q| self.is_disk(q)).collect();
+        self.prefetch(&likely);
         let mut best: Option<(DVec2, f64)> = None;
         for (on, normal) in points {
             let mut off = OFFSET * self.scale;

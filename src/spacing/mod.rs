@@ -554,8 +554,7 @@ impl<'a> Spacer<'a> {
         thetas.sort_by(f64::total_cmp);
         thetas.dedup();
         self.meridians += thetas.len();
-        let upper =
-            if first { None } else { Some(thetas.iter().map(|&t| self.chain(hi, t)).collect::<Result<Vec<_>, _>>()?) };
+        let upper = if first { None } else { Some(crate::par::try_map(thetas.len(), |i| self.chain(hi, thetas[i]))?) };
         // Near a slit tip the meridians bend around the end of the hole on the surface, and across
         // a crease the scallop has a kink, so the distances along them need not be monotone:
         // those are also tested point by point.
@@ -584,12 +583,12 @@ impl<'a> Spacer<'a> {
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
     fn ring_length(&self, rho: f64) -> Result<(f64, Vec<f64>), SpacingError> {
         const M: usize = 2048;
+        let points = crate::par::try_map(M + 1, |i| Ok(self.point(rho, TAU * i as f64 / M as f64)?.p))?;
         let mut cumulative = Vec::with_capacity(M + 1);
         cumulative.push(0.0);
-        let mut prev = self.point(rho, 0.0)?.p;
+        let mut prev = points[0];
         let mut total = 0.0;
-        for i in 1..=M {
-            let p = self.point(rho, TAU * i as f64 / M as f64)?.p;
+        for &p in &points[1..] {
             total += (p - prev).length();
             cumulative.push(total);
             prev = p;
@@ -640,14 +639,14 @@ impl<'a> Spacer<'a> {
     fn first_failure(&mut self, band: &mut Band, rho: f64) -> Result<Option<usize>, SpacingError> {
         self.trials += 1;
         let n = band.thetas.len();
-        for k in 0..n {
-            let i = (band.last_fail + k) % n;
-            if !self.meridian_ok(band, i, rho)? {
-                band.last_fail = i;
-                return Ok(Some(i));
-            }
+        let start = band.last_fail;
+        let at = |k: usize| (start + k) % n;
+        let (this, tested) = (&*self, &*band);
+        let failed = crate::par::find_first(n, |k| Ok::<_, SpacingError>(!this.meridian_ok(tested, at(k), rho)?))?;
+        if let Some(k) = failed {
+            band.last_fail = at(k);
         }
-        Ok(None)
+        Ok(failed.map(at))
     }
 
     /// The smallest radius in (`bad`, `band.hi`) that every active meridian admits, to the step

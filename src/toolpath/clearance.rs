@@ -51,69 +51,77 @@ pub fn clear_facets(
     radius_mm: f64,
     chord_tolerance_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
-    let mut report = Clearance::default();
     let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
-    let mut out_cc = Vec::with_capacity(cc.len());
-    let mut out_n = Vec::with_capacity(cc.len());
     let limit = radius_mm - chord_tolerance_mm;
     let centre = |q: (DVec3, DVec3)| q.0 + radius_mm * q.1;
     // Between two centres outside every ball of radius R round a facet point a move enters such
     // a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
     let short = |a: DVec3, b: DVec3| a.distance_squared(b) <= 8.0 * radius_mm * chord_tolerance_mm;
-    let mut prev = (DVec3::ZERO, DVec3::ZERO);
-    for i in 0..cc.len() {
-        if i == 0 {
-            prev = clear_one(faces, cc[0], normals[0], face(0), true, radius_mm, &mut report);
-            out_cc.push(prev.0);
-            out_n.push(prev.1);
-            continue;
-        }
-        // Off its own face first; one traversal then confirms that no other facet is within R
-        // of it and tests the move to it (most centres need no more).
-        let mut scratch = Clearance::default();
-        let mut b = clear_one(faces, cc[i], normals[i], face(i), false, radius_mm, &mut scratch);
-        let (ca, mut cb) = (centre(prev), centre(b));
-        let segment_limit = if short(ca, cb) { f64::NEG_INFINITY } else { limit };
-        let (end_hit, mut move_hit) = faces.move_hits(ca, cb, radius_mm * (1.0 - CLEAR_REL), segment_limit);
-        if end_hit {
-            b = clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report);
-            cb = centre(b);
-            move_hit = !short(ca, cb) && faces.segment_nearer_than(ca, cb, limit);
-        } else {
-            report.merge(&scratch);
-        }
-        if !move_hit {
-            out_cc.push(b.0);
-            out_n.push(b.1);
-            prev = b;
-            continue;
-        }
-        let mut pending = vec![(prev, b, 0usize)];
-        let mut inserted = Vec::new();
-        // Depth first, left half first, so the points come out in path order.
-        while let Some((a, b, depth)) = pending.pop() {
-            let (ca, cb) = (centre(a), centre(b));
-            if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
-                inserted.push(b);
-                continue;
+
+    // Each centre on its own (in parallel): off its own face first; one traversal then confirms
+    // that no other facet is within R of it (most centres need no more).
+    let cleared = crate::par::map(
+        cc.len(),
+        || (),
+        |_, i| {
+            let mut report = Clearance::default();
+            let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, radius_mm, &mut report);
+            if i == 0 || !faces.move_hits(centre(b), centre(b), radius_mm * (1.0 - CLEAR_REL), f64::NEG_INFINITY).0 {
+                return (b, report);
             }
-            if depth == MAX_SPLITS {
-                report.unresolved += 1;
-                inserted.push(b);
-                continue;
+            let mut report = Clearance::default();
+            (clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report), report)
+        },
+    );
+    // Then each move between two cleared centres (in parallel): the points to append for it,
+    // split at cleared midpoints while it dips into a facet.
+    let moves = crate::par::map(
+        cc.len(),
+        || (),
+        |_, i| {
+            let mut report = Clearance::default();
+            let b = cleared[i].0;
+            if i == 0
+                || short(centre(cleared[i - 1].0), centre(b))
+                || !faces.segment_nearer_than(centre(cleared[i - 1].0), centre(b), limit)
+            {
+                return (vec![b], report);
             }
-            let mid = 0.5 * (ca + cb);
-            let dir = (a.1 + b.1).normalize_or(a.1);
-            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
-            report.inserted += 1;
-            pending.push((m, b, depth + 1));
-            pending.push((a, m, depth + 1));
-        }
-        for (q, m) in inserted {
+            let mut pending = vec![(cleared[i - 1].0, b, 0usize)];
+            let mut inserted = Vec::new();
+            // Depth first, left half first, so the points come out in path order.
+            while let Some((a, b, depth)) = pending.pop() {
+                let (ca, cb) = (centre(a), centre(b));
+                if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+                    inserted.push(b);
+                    continue;
+                }
+                if depth == MAX_SPLITS {
+                    report.unresolved += 1;
+                    inserted.push(b);
+                    continue;
+                }
+                let mid = 0.5 * (ca + cb);
+                let dir = (a.1 + b.1).normalize_or(a.1);
+                let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
+                report.inserted += 1;
+                pending.push((m, b, depth + 1));
+                pending.push((a, m, depth + 1));
+            }
+            (inserted, report)
+        },
+    );
+    let mut report = Clearance::default();
+    for (_, r) in &cleared {
+        report.merge(r);
+    }
+    let (mut out_cc, mut out_n) = (Vec::with_capacity(cc.len()), Vec::with_capacity(cc.len()));
+    for (points, r) in moves {
+        report.merge(&r);
+        for (q, m) in points {
             out_cc.push(q);
             out_n.push(m);
         }
-        prev = b;
     }
     (out_cc, out_n, report)
 }

@@ -263,15 +263,7 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let (r, h, cell, search) = check_options(options)?;
     let samples = sample_surface(surface, options.samples, options.seed)?;
     let volume = SweptVolume::new(passes, r)?;
-    let mut prober = volume.prober();
-
-    // Probed in a space-filling-curve order (neighbouring samples reuse the same tree nodes in
-    // cache: 2–3× faster than the random order), reduced in sample order (fixed sums).
-    let mut probes = vec![Probe { scallop: None, depth: f64::NEG_INFINITY, passes_over: 0 }; samples.len()];
-    for i in morton_order(samples.iter().map(|s| s.position)) {
-        let s = &samples[i as usize];
-        probes[i as usize] = prober.probe(s.position, s.normal, h, search);
-    }
+    let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
     let mut scallops = Vec::with_capacity(samples.len());
     let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
     let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
@@ -303,14 +295,9 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let (v_max, v_cells) = max_variance(cells);
 
     let nv = surface.positions.len();
-    let (mut vertex_scallop_mm, mut vertex_uncovered) = (vec![search; nv], vec![true; nv]);
-    for v in morton_order(surface.positions.iter().copied()) {
-        let v = v as usize;
-        if let Some(t) = prober.probe(surface.positions[v], surface.vertex_normals[v], h, search).scallop {
-            vertex_scallop_mm[v] = t;
-            vertex_uncovered[v] = false;
-        }
-    }
+    let vertex_probes = probe_all(&volume, nv, |v| (surface.positions[v], surface.vertex_normals[v]), h, search);
+    let vertex_scallop_mm = vertex_probes.iter().map(|p| p.scallop.unwrap_or(search)).collect();
+    let vertex_uncovered = vertex_probes.iter().map(|p| p.scallop.is_none()).collect();
     let area_per_sample = surface.area() / n as f64;
     Ok(Verification {
         samples: n,
@@ -336,6 +323,33 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
 }
 
 /// Indices of `points` sorted along a Morton (Z-order) curve over their bounding box.
+/// Probes the `n` points `at(i)` (position, normal), in index order.
+///
+/// They are probed in a space-filling-curve order (neighbouring points reuse the same tree nodes
+/// in cache: 2–3× faster than a random order; each thread takes a stretch of the curve).
+fn probe_all(
+    volume: &SweptVolume,
+    n: usize,
+    at: impl Fn(usize) -> (DVec3, DVec3) + Sync,
+    h: f64,
+    search: f64,
+) -> Vec<Probe> {
+    let order = morton_order((0..n).map(|i| at(i).0));
+    let probed = crate::par::map(
+        n,
+        || volume.prober(),
+        |prober, k| {
+            let (p, normal) = at(order[k] as usize);
+            prober.probe(p, normal, h, search)
+        },
+    );
+    let mut probes = vec![Probe { scallop: None, depth: f64::NEG_INFINITY, passes_over: 0 }; n];
+    for (&i, probe) in order.iter().zip(probed) {
+        probes[i as usize] = probe;
+    }
+    probes
+}
+
 fn morton_order(points: impl Iterator<Item = DVec3> + Clone) -> Vec<u32> {
     let (lo, hi) = points
         .clone()
