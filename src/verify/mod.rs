@@ -322,7 +322,6 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     })
 }
 
-/// Indices of `points` sorted along a Morton (Z-order) curve over their bounding box.
 /// Probes the `n` points `at(i)` (position, normal), in index order.
 ///
 /// They are probed in a space-filling-curve order (neighbouring points reuse the same tree nodes
@@ -350,6 +349,7 @@ fn probe_all(
     probes
 }
 
+/// Indices of `points` sorted along a Morton (Z-order) curve over their bounding box.
 fn morton_order(points: impl Iterator<Item = DVec3> + Clone) -> Vec<u32> {
     let (lo, hi) = points
         .clone()
