@@ -66,7 +66,7 @@ pub fn clear_facets(
         |_, i| {
             let mut report = Clearance::default();
             let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, radius_mm, &mut report);
-            if i == 0 || !faces.move_hits(centre(b), centre(b), radius_mm * (1.0 - CLEAR_REL), f64::NEG_INFINITY).0 {
+            if i == 0 || !faces.point_nearer_than(centre(b), radius_mm * (1.0 - CLEAR_REL)) {
                 return (b, report);
             }
             let mut report = Clearance::default();
