@@ -227,7 +227,7 @@ impl FaceTree {
     /// `face`, when given, is tried first without a search (the face under the ball, which is
     /// usually the one it dips into: 98 % of the centres on freeform_4_holes). With `search`
     /// false that is all: the ball is clear of `face`, and the caller confirms the rest (see
-    /// [`FaceTree::move_hits`]).
+    /// [`FaceTree::point_nearer_than`]).
     pub fn clear_ball(&self, centre: DVec3, dir: DVec3, radius: f64, face: Option<usize>, search: bool) -> ClearBall {
         let limit = radius * (1.0 - CLEAR_REL);
         let step = |c: DVec3, hit: &Nearest| {
