@@ -43,6 +43,15 @@ where
     }
 }
 
+/// [`map`] without per-job state: `f(i)` for every `i` in `0..n`, in order.
+pub(crate) fn each<R, F>(n: usize, f: F) -> Vec<R>
+where
+    R: Send,
+    F: Fn(usize) -> R + Sync + Send,
+{
+    map(n, || (), |_, i| f(i))
+}
+
 /// Like [`map`] for fallible items: the error of the lowest index that fails, as a sequential
 /// loop would return it.
 pub(crate) fn try_map<R, E, F>(n: usize, f: F) -> Result<Vec<R>, E>
@@ -51,7 +60,7 @@ where
     E: Send,
     F: Fn(usize) -> Result<R, E> + Sync + Send,
 {
-    map(n, || (), |_, i| f(i)).into_iter().collect()
+    each(n, f).into_iter().collect()
 }
 
 /// The lowest `i` in `0..n` where `hit(i)` is true or fails, as a sequential loop that stops

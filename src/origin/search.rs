@@ -102,18 +102,25 @@ impl<'s, 'a> Search<'s, 'a> {
     /// when there are threads (the wasm build has none: nothing is done there). The search's
     /// course is the sequential one whatever is fetched: [`Search::eval`] only takes the value
     /// from here instead of computing it. Unused values cost a thread's idle time, no more.
-    fn prefetch(&mut self, points: &[DVec2]) {
+    /// With `disk_only`, only the points that are feasible disk poles (the search asks for the
+    /// others through [`Search::eval_disk`], which skips them).
+    fn prefetch(&mut self, points: &[DVec2], disk_only: bool) {
         if crate::par::threads() < 2 {
             return;
         }
         let room = self.budget.saturating_sub(self.evaluations);
-        let todo: Vec<DVec2> =
-            points.iter().copied().filter(|&p| !self.ahead.iter().any(|(q, _)| *q == p)).take(room).collect();
+        let todo: Vec<DVec2> = points
+            .iter()
+            .copied()
+            .filter(|&p| !disk_only || matches!(self.region(p), Region::Disk))
+            .filter(|&p| !self.ahead.iter().any(|(q, _)| *q == p))
+            .take(room)
+            .collect();
         if todo.len() < 2 {
             return; // one point gains nothing from a thread
         }
         let ev = self.ev;
-        let energies = crate::par::map(todo.len(), || (), |_, i| ev.evaluate(todo[i]).ok());
+        let energies = crate::par::each(todo.len(), |i| ev.evaluate(todo[i]).ok());
         self.ahead.extend(todo.into_iter().zip(energies));
     }
 
@@ -124,10 +131,6 @@ impl<'s, 'a> Search<'s, 'a> {
         if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
             self.best = Some((p, energy));
         }
-    }
-
-    fn is_disk(&self, p: DVec2) -> bool {
-        matches!(self.region(p), Region::Disk)
     }
 
     /// E_min at `p` if `p` is a feasible disk pole.
@@ -143,7 +146,7 @@ impl<'s, 'a> Search<'s, 'a> {
     pub fn run(&mut self, centroid: DVec2, centroid_e: f64, starts: usize) {
         let holes: Vec<DVec2> = (1..self.domain.loops.len()).map(|j| self.ev.solver().canonical_hole_pole(j)).collect();
         let starts = self.starts(centroid, starts);
-        self.prefetch(&[&holes[..], &starts[1..]].concat());
+        self.prefetch(&[&holes[..], &starts[1..]].concat(), false);
         for &p in &holes {
             self.eval(p);
         }
@@ -217,8 +220,7 @@ impl<'s, 'a> Search<'s, 'a> {
                     break 'outer;
                 }
                 // This step and the halved one, should it fail.
-                let tries = [step, 0.5 * step].map(|s| p + dir * s);
-                self.prefetch(&tries.into_iter().filter(|&q| self.is_disk(q)).collect::<Vec<_>>());
+                self.prefetch(&[step, 0.5 * step].map(|s| p + dir * s), true);
                 let q = p + dir * step;
                 let next = match self.region(q) {
                     Region::Disk => self.eval(q).map(|eq| (q, eq)),
@@ -243,8 +245,7 @@ impl<'s, 'a> Search<'s, 'a> {
     /// infeasible; a component is 0 when both are.
     fn gradient(&mut self, p: DVec2, e: f64, h: f64) -> Option<DVec2> {
         let mut g = DVec2::ZERO;
-        let forward = [p + DVec2::X * h, p + DVec2::Y * h];
-        self.prefetch(&forward.into_iter().filter(|&q| self.is_disk(q)).collect::<Vec<_>>());
+        self.prefetch(&[p + DVec2::X * h, p + DVec2::Y * h], true);
         for (k, u) in [DVec2::X, DVec2::Y].into_iter().enumerate() {
             let d = if let Some(ef) = self.eval_disk(p + u * h) {
                 (ef - e) / h
@@ -288,9 +289,8 @@ impl<'s, 'a> Search<'s, 'a> {
             let normal = (b - a).perp() / len;
             points.push((on, normal));
         }
-        let first_offset = |&(on, normal): &(DVec2, DVec2)| on + normal * (OFFSET * self.scale);
-        let likely: Vec<DVec2> = points.iter().map(first_offset).filter(|&q| self.is_disk(q)).collect();
-        self.prefetch(&likely);
+        let first: Vec<DVec2> = points.iter().map(|&(on, normal)| on + normal * (OFFSET * self.scale)).collect();
+        self.prefetch(&first, true);
         let mut best: Option<(DVec2, f64)> = None;
         for (on, normal) in points {
             let mut off = OFFSET * self.scale;

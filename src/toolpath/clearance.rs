@@ -60,57 +60,51 @@ pub fn clear_facets(
 
     // Each centre on its own (in parallel): off its own face first; one traversal then confirms
     // that no other facet is within R of it (most centres need no more).
-    let cleared = crate::par::map(
-        cc.len(),
-        || (),
-        |_, i| {
-            let mut report = Clearance::default();
-            let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, radius_mm, &mut report);
-            if i == 0 || !faces.point_nearer_than(centre(b), radius_mm * (1.0 - CLEAR_REL)) {
-                return (b, report);
-            }
-            let mut report = Clearance::default();
-            (clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report), report)
-        },
-    );
+    let cleared = crate::par::each(cc.len(), |i| {
+        let mut report = Clearance::default();
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, radius_mm, &mut report);
+        if i == 0 || !faces.point_nearer_than(centre(b), radius_mm * (1.0 - CLEAR_REL)) {
+            return (b, report);
+        }
+        let mut report = Clearance::default();
+        (clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report), report)
+    });
     // Then each move between two cleared centres (in parallel): the points to append for it,
     // split at cleared midpoints while it dips into a facet.
-    let moves = crate::par::map(
-        cc.len(),
-        || (),
-        |_, i| {
-            let mut report = Clearance::default();
-            let b = cleared[i].0;
-            if i == 0
-                || short(centre(cleared[i - 1].0), centre(b))
-                || !faces.segment_nearer_than(centre(cleared[i - 1].0), centre(b), limit)
-            {
-                return (vec![b], report);
+    let moves = crate::par::each(cc.len(), |i| {
+        let mut report = Clearance::default();
+        let b = cleared[i].0;
+        if i == 0 {
+            return (vec![b], report);
+        }
+        let prev = cleared[i - 1].0;
+        let (ca, cb) = (centre(prev), centre(b));
+        if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+            return (vec![b], report);
+        }
+        let mut pending = vec![(prev, b, 0usize)];
+        let mut inserted = Vec::new();
+        // Depth first, left half first, so the points come out in path order.
+        while let Some((a, b, depth)) = pending.pop() {
+            let (ca, cb) = (centre(a), centre(b));
+            if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+                inserted.push(b);
+                continue;
             }
-            let mut pending = vec![(cleared[i - 1].0, b, 0usize)];
-            let mut inserted = Vec::new();
-            // Depth first, left half first, so the points come out in path order.
-            while let Some((a, b, depth)) = pending.pop() {
-                let (ca, cb) = (centre(a), centre(b));
-                if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
-                    inserted.push(b);
-                    continue;
-                }
-                if depth == MAX_SPLITS {
-                    report.unresolved += 1;
-                    inserted.push(b);
-                    continue;
-                }
-                let mid = 0.5 * (ca + cb);
-                let dir = (a.1 + b.1).normalize_or(a.1);
-                let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
-                report.inserted += 1;
-                pending.push((m, b, depth + 1));
-                pending.push((a, m, depth + 1));
+            if depth == MAX_SPLITS {
+                report.unresolved += 1;
+                inserted.push(b);
+                continue;
             }
-            (inserted, report)
-        },
-    );
+            let mid = 0.5 * (ca + cb);
+            let dir = (a.1 + b.1).normalize_or(a.1);
+            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
+            report.inserted += 1;
+            pending.push((m, b, depth + 1));
+            pending.push((a, m, depth + 1));
+        }
+        (inserted, report)
+    });
     let mut report = Clearance::default();
     for (_, r) in &cleared {
         report.merge(r);
