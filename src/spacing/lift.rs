@@ -18,14 +18,23 @@ use std::f64::consts::{PI, TAU};
 /// A point of the surface found from its slit-domain image.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lifted {
-    /// The image point asked for.
-    pub w: DVec2,
+    /// The image point asked for, in polar form: |w| and arg w (see [`Lifted::w`]).
+    pub rho: f64,
+    pub theta: f64,
     /// The surface point (cutter contact), millimetres.
     pub p: DVec3,
     /// Unit surface normal there (interpolated vertex normals), towards the tool.
     pub n: DVec3,
     /// The face the point lies on.
     pub face: u32,
+}
+
+impl Lifted {
+    /// The image point asked for (computed on demand: most callers need only the surface point).
+    pub fn w(&self) -> DVec2 {
+        let (sin, cos) = num::sin_cos(self.theta);
+        DVec2::new(self.rho * cos, self.rho * sin)
+    }
 }
 
 /// The inverse slit map of one pole, ready for many queries.
@@ -70,7 +79,9 @@ impl<'a> Lift<'a> {
         let x = (theta + PI).rem_euclid(TAU) - PI;
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for shift in [0.0, TAU, -TAU] {
-            self.strip.best(&self.corners, DVec2::new(x + shift, rho), &mut best);
+            if shift == 0.0 || self.strip.spans(x + shift) {
+                self.strip.best(&self.corners, DVec2::new(x + shift, rho), &mut best);
+            }
         }
         let (face, bary) = match best {
             Some((m, f, b)) if m >= -1e-10 => (f, b),
@@ -190,8 +201,7 @@ impl<'a> Lift<'a> {
         let p = at(&s.positions);
         let n = at(&s.vertex_normals).normalize_or_zero();
         let n = if n == DVec3::ZERO { s.face_normals[face] } else { n };
-        let (sin, cos) = num::sin_cos(theta);
-        Lifted { w: DVec2::new(rho * cos, rho * sin), p, n, face: face as u32 }
+        Lifted { rho, theta, p, n, face: face as u32 }
     }
 }
 
@@ -357,7 +367,13 @@ fn gap(theta: f64, e: &(f64, f64, DVec2, DVec2)) -> f64 {
 struct StripIndex {
     /// Row boundaries in y (|w|), increasing; row k is [rows[k], rows[k + 1]).
     rows: Vec<f64>,
+    /// Uniform bins over the finite row boundaries, (lower edge, bins per unit of y), and the
+    /// row of each bin's lower edge: a row is found by a step or two instead of a binary search.
+    row_bins: (f64, f64),
+    row_of_bin: Vec<u32>,
     nx: usize,
+    /// First and last column holding a face: a query shifted by 2π outside them finds none.
+    cols: (usize, usize),
     cell_start: Vec<u32>,
     cell_faces: Vec<u32>,
 }
@@ -368,8 +384,10 @@ impl StripIndex {
 
     fn new(corners: &[[DVec2; 3]]) -> Self {
         let f = corners.len().max(1);
-        let ny = ((f as f64).sqrt().ceil() as usize).max(1);
-        let nx = (f.div_ceil(ny) * 2).max(1);
+        // About four cells per face over (−π, π] (the columns span twice that): a query's cell
+        // then lists a few faces (8 per non-empty cell at one cell per face on the 40k panel).
+        let ny = 2 * ((f as f64).sqrt().ceil() as usize).max(1);
+        let nx = (f.div_ceil(ny) * 8).max(1);
         let mut ys: Vec<f64> = corners.iter().map(|c| (c[0].y + c[1].y + c[2].y) / 3.0).collect();
         ys.sort_by(f64::total_cmp);
         let mut rows: Vec<f64> = (0..=ny).map(|k| ys[((k * ys.len()) / ny).min(ys.len() - 1)]).collect();
@@ -377,8 +395,35 @@ impl StripIndex {
         rows[ny] = f64::INFINITY;
         rows.dedup();
         let ny = rows.len() - 1;
-        let mut index = Self { rows, nx, cell_start: vec![0; nx * ny + 1], cell_faces: Vec::new() };
+        let (y0, y1) = (rows[1.min(ny)], rows[ny.saturating_sub(1)]);
+        let bins = 4 * ny;
+        let scale = if y1 > y0 && y0.is_finite() && y1.is_finite() { bins as f64 / (y1 - y0) } else { 0.0 };
+        let row_of_bin = if scale > 0.0 {
+            (0..bins)
+                .map(|k| {
+                    let y = y0 + k as f64 / scale;
+                    rows.partition_point(|&r| r <= y).saturating_sub(1) as u32
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut index = Self {
+            rows,
+            row_bins: (y0, scale),
+            row_of_bin,
+            nx,
+            cols: (0, nx - 1),
+            cell_start: vec![0; nx * ny + 1],
+            cell_faces: Vec::new(),
+        };
         let ranges: Vec<(usize, usize, usize, usize)> = corners.iter().map(|c| index.cell_range(c)).collect();
+        // (Faces without a strip image, NaN corners, sit in column 0 and match nothing.)
+        index.cols = ranges
+            .iter()
+            .zip(corners)
+            .filter(|(_, c)| c[0].x.is_finite())
+            .fold((nx - 1, 0), |(lo, hi), (r, _)| (lo.min(r.0), hi.max(r.1)));
         for &(x0, x1, y0, y1) in &ranges {
             for y in y0..=y1 {
                 for x in x0..=x1 {
@@ -403,8 +448,30 @@ impl StripIndex {
         index
     }
 
+    /// Whether the column of `x` may hold a face (the columns outside [`StripIndex::cols`] are
+    /// empty).
+    fn spans(&self, x: f64) -> bool {
+        let c = self.col(x);
+        c >= self.cols.0 && c <= self.cols.1
+    }
+
     fn row(&self, y: f64) -> usize {
-        self.rows.partition_point(|&r| r <= y).saturating_sub(1).min(self.rows.len() - 2)
+        let last = self.rows.len() - 2;
+        let (y0, scale) = self.row_bins;
+        let k = (y - y0) * scale;
+        if !(k >= 0.0 && k < self.row_of_bin.len() as f64) {
+            return self.rows.partition_point(|&r| r <= y).saturating_sub(1).min(last);
+        }
+        // The bin gives the row of its lower edge: step from there to the last row boundary at
+        // or below y (down as well, should rounding have put y just under that edge).
+        let mut r = self.row_of_bin[k as usize] as usize;
+        while r + 1 < self.rows.len() && self.rows[r + 1] <= y {
+            r += 1;
+        }
+        while r > 0 && self.rows[r] > y {
+            r -= 1;
+        }
+        r.min(last)
     }
 
     fn col(&self, x: f64) -> usize {
@@ -424,6 +491,9 @@ impl StripIndex {
         let c = self.row(q.y) * self.nx + self.col(q.x);
         for &f in &self.cell_faces[self.cell_start[c] as usize..self.cell_start[c + 1] as usize] {
             let t = corners[f as usize];
+            if best.is_some_and(|(bm, _, _)| bm >= 0.0) && surely_outside(t, q) {
+                continue; // cannot beat a face that contains q: skip the divisions
+            }
             let bary = barycentric(t[0], t[1], t[2], q);
             let m = bary[0].min(bary[1]).min(bary[2]);
             if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
@@ -431,6 +501,17 @@ impl StripIndex {
             }
         }
     }
+}
+
+/// Whether `q` lies clearly outside the triangle `t` (some barycentric coordinate below −1e-9),
+/// decided without dividing: then its smallest coordinate is negative.
+fn surely_outside(t: [DVec2; 3], q: DVec2) -> bool {
+    let d = (t[1] - t[0]).perp_dot(t[2] - t[0]);
+    let x1 = (q - t[0]).perp_dot(t[2] - t[0]);
+    let x2 = (t[1] - t[0]).perp_dot(q - t[0]);
+    let eps = 1e-9 * d.abs();
+    let s = d.signum();
+    s * x1 < -eps || s * x2 < -eps || s * (d - x1 - x2) < -eps
 }
 
 #[cfg(test)]

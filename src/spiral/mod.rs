@@ -346,7 +346,7 @@ fn sample(
             None => lift.polar(rho, theta),
         };
         let l = l.ok_or(SpiralError::Lift { rho, theta })?;
-        Ok(PathPoint { cc: l.p, normal: l.n, w: l.w, face: l.face })
+        Ok(PathPoint { cc: l.p, normal: l.n, w: l.w(), face: l.face })
     };
     let tol = options.chord_tolerance_mm;
     let radius = options.radius_mm;
