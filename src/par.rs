@@ -84,6 +84,33 @@ where
     first.map(|(i, r)| r.map(|_| i)).transpose()
 }
 
+/// `background()` on a thread of its own while `foreground()` runs on this one (both inline, one
+/// after the other, on wasm): for stages that depend on neither's result. `foreground` may use
+/// what cannot cross threads (the caller's clock).
+pub(crate) fn beside<A, B>(background: impl FnOnce() -> A + Send, foreground: impl FnOnce() -> B) -> (A, B)
+where
+    A: Send,
+{
+    #[cfg(target_arch = "wasm32")]
+    {
+        let b = foreground();
+        (background(), b)
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        if threads() == 1 {
+            let b = foreground();
+            return (background(), b);
+        }
+        std::thread::scope(|s| {
+            let handle = s.spawn(background);
+            let b = foreground();
+            // A panic in the background is re-raised here, as it would have been inline.
+            (handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), b)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -121,7 +121,9 @@ pub enum PlanError {
     Verify(#[from] VerifyError),
 }
 
-/// Stage timings, milliseconds.
+/// Stage timings, milliseconds. `post` and `verify` run side by side (natively): `verify` is
+/// the span from their common start to the verifier's end, and `total` (the wall time of every
+/// stage) counts that span once.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Timings {
     pub read: f64,
@@ -306,21 +308,15 @@ impl Planner {
             clearance,
         };
 
+        // The post and the verifier both read the finished toolpath only: the verifier runs
+        // beside the post, and its time is counted from their common start to its end.
         stage(4);
-        let t = now();
-        let header = header_lines(options, &origin, &rings, &summary);
-        let gcode_options = GcodeOptions {
-            post: options.post,
-            part_name: options.part_name.clone(),
-            header,
-            ..GcodeOptions::default()
-        };
-        let gcode = gcode::gcode(&toolpath, &gcode_options)?;
-        timings.post = now() - t;
-
         stage(5);
         let t = now();
-        let verification = if options.verify_samples > 0 {
+        let verify_centres = || -> Result<Option<Verification>, VerifyError> {
+            if options.verify_samples == 0 {
+                return Ok(None);
+            }
             let centres: Vec<DVec3> = toolpath.contact_moves().iter().map(|m| m.centre).collect();
             let verify_options = VerifyOptions {
                 radius_mm: r,
@@ -334,10 +330,21 @@ impl Planner {
                 },
                 ..VerifyOptions::default()
             };
-            Some(verify::verify(&self.surface, &[centres], &verify_options)?)
-        } else {
-            None
+            Ok(Some(verify::verify(&self.surface, &[centres], &verify_options)?))
         };
+        let (verification, gcode) = crate::par::beside(verify_centres, || {
+            let header = header_lines(options, &origin, &rings, &summary);
+            let gcode_options = GcodeOptions {
+                post: options.post,
+                part_name: options.part_name.clone(),
+                header,
+                ..GcodeOptions::default()
+            };
+            let gcode = gcode::gcode(&toolpath, &gcode_options);
+            timings.post = now() - t;
+            gcode
+        });
+        let (gcode, verification) = (gcode?, verification?);
         timings.verify = now() - t;
         timings.total = timings.flatten
             + timings.slitmap
@@ -345,7 +352,6 @@ impl Planner {
             + timings.spacing
             + timings.spiral
             + timings.toolpath
-            + timings.post
             + timings.verify;
         stage(6);
 
@@ -377,7 +383,15 @@ impl Planner {
         let rings = rings?;
         stage(2);
         let t = now();
-        let spiral = spiral::spiral(&self.surface, &map, &rings, spiral_options);
+        // The facet tree the toolpath stage needs is built beside the spiral.
+        let ((), spiral) = crate::par::beside(
+            || {
+                if options.facets == Facets::Exact {
+                    self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
+                }
+            },
+            || spiral::spiral(&self.surface, &map, &rings, spiral_options),
+        );
         timings.spiral += now() - t;
         Ok((map, rings, spiral?))
     }
