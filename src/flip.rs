@@ -8,8 +8,6 @@
 //! with faces covering the same quadrilateral. Deterministic: edges are visited in a fixed order,
 //! and at most `50·faces + 1000` flips are made whatever the predicate does.
 
-use std::collections::HashMap;
-
 /// Flips interior edges of `triangles` while `needs_flip(a, b, c, d)` holds for edge a → b with c
 /// opposite in the face on its left and d in the face on its right. Returns the triangles and
 /// the number of flips.
@@ -19,7 +17,7 @@ pub(crate) fn lawson(
 ) -> (Vec<[u32; 3]>, usize) {
     let mut tris = triangles.to_vec();
     // Directed half-edge a → b ↦ face.
-    let mut half: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * tris.len());
+    let mut half: crate::hash::EdgeMap<usize> = crate::hash::edge_map(3 * tris.len());
     for (f, t) in tris.iter().enumerate() {
         for k in 0..3 {
             half.insert((t[k], t[(k + 1) % 3]), f);

@@ -27,6 +27,7 @@ pub mod fixtures;
 pub mod flatten;
 mod flip;
 pub mod gcode;
+mod hash;
 pub mod linalg;
 pub mod mesh;
 pub mod num;

@@ -36,8 +36,9 @@
 
 use super::Surface;
 use crate::flip::third;
+use crate::hash::{edge_map, EdgeMap};
 use glam::{DVec2, DVec3};
-use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
 
 /// No point is inserted for a triangle whose circumradius is below this fraction of the part's
 /// bounding-box diagonal: Ruppert's algorithm needs no such floor on valid input, but rounding
@@ -97,7 +98,7 @@ struct Refiner {
     /// its normal and curvature tensor come from.
     origin: Vec<u32>,
     planes: Vec<Plane>,
-    half: HashMap<(u32, u32), usize>,
+    half: EdgeMap<usize>,
     /// Boundary edge (sorted) ↦ the vertex it was split at.
     split: BTreeMap<(u32, u32), u32>,
     min_sin: f64,
@@ -136,7 +137,7 @@ pub fn refine_flat_regions(s: &Surface, min_angle_deg: f64) -> Surface {
         vertex_normals: s.vertex_normals.clone(),
         tris: s.triangles.clone(),
         origin: (0..s.triangles.len() as u32).collect(),
-        half: HashMap::with_capacity(3 * s.triangles.len()),
+        half: edge_map(3 * s.triangles.len()),
         split: BTreeMap::new(),
         min_sin: min_angle_deg.to_radians().sin(),
         min_size: MIN_SIZE_REL * (hi - lo).length(),
@@ -194,7 +195,7 @@ pub fn refine_flat_regions(s: &Surface, min_angle_deg: f64) -> Surface {
 /// The flat regions of `s`: per face its patch (None for faces in no flat region of two or more
 /// faces) and each patch's plane.
 fn flat_patches(s: &Surface) -> (Vec<Option<u32>>, Vec<Plane>) {
-    let mut half: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * s.triangles.len());
+    let mut half: EdgeMap<usize> = edge_map(3 * s.triangles.len());
     for (f, t) in s.triangles.iter().enumerate() {
         for k in 0..3 {
             half.insert((t[k], t[(k + 1) % 3]), f);
