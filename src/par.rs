@@ -131,6 +131,13 @@ mod tests {
     }
 
     #[test]
+    fn beside_returns_both_results() {
+        let data: Vec<u64> = (0..10_000).collect();
+        let (sum, max) = beside(|| data.iter().sum::<u64>(), || data.iter().copied().max());
+        assert_eq!((sum, max), (49_995_000, Some(9_999)));
+    }
+
+    #[test]
     fn try_map_returns_the_first_error_in_index_order() {
         let got = try_map(5000, |i| if i % 1000 == 999 { Err(i) } else { Ok(i) });
         assert_eq!(got, Err(999));

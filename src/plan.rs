@@ -121,9 +121,9 @@ pub enum PlanError {
     Verify(#[from] VerifyError),
 }
 
-/// Stage timings, milliseconds. `post` and `verify` run side by side (natively): `verify` is
-/// the span from their common start to the verifier's end, and `total` (the wall time of every
-/// stage) counts that span once.
+/// Stage timings, milliseconds. `flatten` includes the rim refinement before it. `post` and
+/// `verify` run side by side (natively): `verify` is the span from their common start to the
+/// verifier's end, and `total` (the wall time of every stage) counts that span once.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Timings {
     pub read: f64,
@@ -196,8 +196,9 @@ impl Planner {
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;
-        let surface = planning_surface(&surface);
+        // The rim refinement prepares the surface for the flattening: its time counts there.
         let t = now();
+        let surface = planning_surface(&surface);
         let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
         let t_flatten = now() - t;
         let domain = PlanarDomain::of_surface(&surface, flattening.uv.clone());
