@@ -101,12 +101,18 @@ impl FaceTree {
             for slot in node.start as usize..(node.start + node.count) as usize {
                 let (n, offset) = self.planes[slot];
                 let d = n.dot(p) - offset;
+                if d * d >= limit2 {
+                    continue;
+                }
+                // Beyond the face's bounding sphere by the limit: beyond the face.
+                let (m, r) = self.spheres[slot];
+                if m.distance_squared(p) >= (limit + r) * (limit + r) {
+                    continue;
+                }
                 let [a, b, c] = self.corners[slot];
-                if d * d < limit2 {
-                    let bary = closest_on_triangle(p, a, b, c);
-                    if (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(p) < limit2 {
-                        return true;
-                    }
+                let bary = closest_on_triangle(p, a, b, c);
+                if (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(p) < limit2 {
+                    return true;
                 }
             }
         }
