@@ -330,75 +330,109 @@ fn layout(
 }
 
 /// Lifts the pieces to the surface and samples them by chord error and segment length.
+///
+/// Each piece starts from the point of its start searched around the face of the last point
+/// before it, so the pieces depend on each other only through that start. They are marched in
+/// parallel from a guessed start (located without a previous face), then joined in order: a
+/// piece whose true start differs from the guess (a start on an edge or in a P1 fold) is
+/// marched again. The result is the sequential march's, bit for bit.
 fn sample(
     lift: &Lift<'_>,
     pieces: &[Piece],
     sense: f64,
     options: &SpiralOptions,
 ) -> Result<Vec<PathPoint>, SpiralError> {
-    // Each point is searched first around the face of the point it refines (continuity
-    // through P1 folds at slit tips, see `Lift::polar_near`).
-    let eval = |piece: &Piece, u: f64, near: Option<u32>| -> Result<PathPoint, SpiralError> {
-        let rho = piece.rho(u);
-        let theta = sense * u;
-        let l = match near {
-            Some(f) => lift.polar_near(rho, theta, f),
-            None => lift.polar(rho, theta),
-        };
-        let l = l.ok_or(SpiralError::Lift { rho, theta })?;
-        Ok(PathPoint { cc: l.p, normal: l.n, w: l.w(), face: l.face })
-    };
-    let tol = options.chord_tolerance_mm;
-    let radius = options.radius_mm;
-    let max_seg = options.max_segment_mm;
+    let start_of = |piece: &Piece, near: Option<u32>| eval(lift, piece, piece.range().0, sense, near);
+    let guesses = crate::par::each(pieces.len(), |j| {
+        let (u0, u1) = pieces[j].range();
+        if u1 <= u0 {
+            return None;
+        }
+        let start = start_of(&pieces[j], None).ok()?;
+        let points = march(lift, &pieces[j], start, sense, options).ok()?;
+        Some((start, points))
+    });
     let mut out: Vec<PathPoint> = Vec::new();
-    // March along each piece: a step is accepted when its chord is short enough and its
-    // midpoint within the chord tolerance; every point is walked to from the previous one.
-    for piece in pieces {
+    for (piece, guess) in pieces.iter().zip(guesses) {
         let (u0, u1) = piece.range();
         if u1 <= u0 {
             continue;
         }
-        let mut u = u0;
-        let mut here = match out.last() {
-            Some(p) => eval(piece, u0, Some(p.face))?,
+        let here = match out.last() {
+            Some(p) => start_of(piece, Some(p.face))?,
             None => {
-                let p = eval(piece, u0, None)?;
+                let p = start_of(piece, None)?;
                 out.push(p);
                 p
             }
         };
-        let mut du = (u1 - u0) / 64.0;
-        while u < u1 {
-            let mut step = du.min(u1 - u);
-            let min_step = 1e-9 * (u1 - u0).max(1.0);
-            let mut halvings = 0;
-            let (next_u, next) = loop {
-                let ub = u + step;
-                let pb = eval(piece, ub, Some(here.face))?;
-                let pm = eval(piece, u + 0.5 * step, Some(here.face))?;
-                let chord = (pb.cc - here.cc).length();
-                let centre = |p: &PathPoint| p.cc + radius * p.normal;
-                let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol
-                    && segment_dist(centre(&pm), centre(&here), centre(&pb)) <= tol;
-                if chord <= max_seg && (smooth || step <= min_step) {
-                    // At the smallest step a deviating midpoint is a kink of the P1 lift.
-                    break (ub, pb);
-                }
-                if step <= min_step {
-                    let rho = piece.rho(u);
-                    return Err(SpiralError::Discontinuous { rho, theta: sense * u, gap_mm: chord });
-                }
-                step = (0.5 * step).max(min_step);
-                halvings += 1;
-            };
-            du = if halvings == 0 { step * 1.5 } else { step.max(64.0 * min_step) };
-            u = if next_u >= u1 { u1 } else { next_u };
-            // A step of the minimal size may not move on the surface (folds): no repeated points.
-            if (next.cc - here.cc).length() > 1e-7 {
-                out.push(next);
-                here = next;
+        match guess {
+            Some((start, points)) if start == here => out.extend(points),
+            _ => out.extend(march(lift, piece, here, sense, options)?),
+        }
+    }
+    Ok(out)
+}
+
+/// The point of `piece` at `u`, searched first around face `near` (continuity through P1 folds
+/// at slit tips, see `Lift::polar_near`).
+fn eval(lift: &Lift<'_>, piece: &Piece, u: f64, sense: f64, near: Option<u32>) -> Result<PathPoint, SpiralError> {
+    let rho = piece.rho(u);
+    let theta = sense * u;
+    let l = match near {
+        Some(f) => lift.polar_near(rho, theta, f),
+        None => lift.polar(rho, theta),
+    };
+    let l = l.ok_or(SpiralError::Lift { rho, theta })?;
+    Ok(PathPoint { cc: l.p, normal: l.n, w: l.w(), face: l.face })
+}
+
+/// The points of `piece` after its start `here`: a step is accepted when its chord is short
+/// enough and its midpoint within the chord tolerance; every point is walked to from the
+/// previous one.
+fn march(
+    lift: &Lift<'_>,
+    piece: &Piece,
+    mut here: PathPoint,
+    sense: f64,
+    options: &SpiralOptions,
+) -> Result<Vec<PathPoint>, SpiralError> {
+    let tol = options.chord_tolerance_mm;
+    let radius = options.radius_mm;
+    let max_seg = options.max_segment_mm;
+    let (u0, u1) = piece.range();
+    let mut out = Vec::new();
+    let mut u = u0;
+    let mut du = (u1 - u0) / 64.0;
+    while u < u1 {
+        let mut step = du.min(u1 - u);
+        let min_step = 1e-9 * (u1 - u0).max(1.0);
+        let mut halvings = 0;
+        let (next_u, next) = loop {
+            let ub = u + step;
+            let pb = eval(lift, piece, ub, sense, Some(here.face))?;
+            let pm = eval(lift, piece, u + 0.5 * step, sense, Some(here.face))?;
+            let chord = (pb.cc - here.cc).length();
+            let centre = |p: &PathPoint| p.cc + radius * p.normal;
+            let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol
+                && segment_dist(centre(&pm), centre(&here), centre(&pb)) <= tol;
+            if chord <= max_seg && (smooth || step <= min_step) {
+                // At the smallest step a deviating midpoint is a kink of the P1 lift.
+                break (ub, pb);
             }
+            if step <= min_step {
+                let rho = piece.rho(u);
+                return Err(SpiralError::Discontinuous { rho, theta: sense * u, gap_mm: chord });
+            }
+            step = (0.5 * step).max(min_step);
+            halvings += 1;
+        };
+        du = if halvings == 0 { step * 1.5 } else { step.max(64.0 * min_step) };
+        u = if next_u >= u1 { u1 } else { next_u };
+        // A step of the minimal size may not move on the surface (folds): no repeated points.
+        if (next.cc - here.cc).length() > 1e-7 {
+            out.push(next);
+            here = next;
         }
     }
     Ok(out)
