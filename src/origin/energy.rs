@@ -251,12 +251,13 @@ impl<'a> EnergyEvaluator<'a> {
         let lo = x(r[0].min(r[1]).min(r[2]));
         let hi = x(r[0].max(r[1]).max(r[2]));
         let last = self.bins - 1;
-        let j0 = (lo.floor() as usize).min(last);
+        // lo and hi are in [0, bins]: truncation is their floor, without a libm call.
+        let j0 = (lo as usize).min(last);
         if hi <= lo {
             add(j0, 1.0);
             return;
         }
-        let j1 = (hi.floor() as usize).min(last);
+        let j1 = (hi as usize).min(last);
         let span = hi - lo;
         for j in j0..=j1 {
             let overlap = hi.min((j + 1) as f64) - lo.max(j as f64);

@@ -475,7 +475,9 @@ impl StripIndex {
     }
 
     fn col(&self, x: f64) -> usize {
-        ((((x - Self::X0) / Self::XSPAN) * self.nx as f64).floor().max(0.0) as usize).min(self.nx - 1)
+        // A saturating cast: negatives (and NaN) give 0, as floor then max(0) did, and truncation
+        // is the floor of the rest, without a libm call.
+        ((((x - Self::X0) / Self::XSPAN) * self.nx as f64) as usize).min(self.nx - 1)
     }
 
     fn cell_range(&self, c: &[DVec2; 3]) -> (usize, usize, usize, usize) {
