@@ -567,8 +567,16 @@ pub fn contact_spiral(surface: ContactSurface, r_outer: f64, r_inner: f64, pitch
 pub(crate) struct SplitMix64(pub(crate) u64);
 
 impl SplitMix64 {
+    const GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+    /// The generator `seed` after `k` draws: its state only counts (what lets a stream be cut
+    /// into pieces drawn in parallel).
+    pub(crate) fn skipped(seed: u64, k: u64) -> Self {
+        Self(seed.wrapping_add(k.wrapping_mul(Self::GAMMA)))
+    }
+
     pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        self.0 = self.0.wrapping_add(Self::GAMMA);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -1028,6 +1036,15 @@ fn delaunay(pts: &[DVec2], order: &[u32]) -> Vec<[u32; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_skipped_generator_continues_the_stream() {
+        let mut stream = SplitMix64(7);
+        let drawn: Vec<u64> = (0..100).map(|_| stream.next_u64()).collect();
+        for k in [0usize, 1, 3, 99] {
+            assert_eq!(SplitMix64::skipped(7, k as u64).next_u64(), drawn[k], "after {k} draws");
+        }
+    }
 
     struct Topo {
         loops: Vec<Vec<u32>>,

@@ -84,6 +84,25 @@ where
     first.map(|(i, r)| r.map(|_| i)).transpose()
 }
 
+/// `(a(), b())`, side by side on the pool when there are threads.
+pub(crate) fn join<A, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B)
+where
+    A: Send,
+    B: Send,
+{
+    #[cfg(target_arch = "wasm32")]
+    {
+        (a(), b())
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        if threads() == 1 {
+            return (a(), b());
+        }
+        rayon::join(a, b)
+    }
+}
+
 /// `background()` on a thread of its own while `foreground()` runs on this one (both inline, one
 /// after the other, on wasm): for stages that depend on neither's result. `foreground` may use
 /// what cannot cross threads (the caller's clock).

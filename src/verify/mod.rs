@@ -173,27 +173,26 @@ pub fn sample_surface(surface: &Surface, count: usize, seed: u64) -> Result<Vec<
         total += a;
         prefix.push(total);
     }
-    let mut rng = SplitMix64(seed);
     let last = prefix.len() - 1;
-    Ok((0..count)
-        .map(|_| {
-            let u = rng.unit() * total;
-            let face = prefix.partition_point(|&c| c <= u).min(last);
-            let (r1, r2) = (rng.unit(), rng.unit());
-            let s = r1.sqrt();
-            let w = [1.0 - s, s * (1.0 - r2), s * r2];
-            let t = surface.triangles[face];
-            let mut position = DVec3::ZERO;
-            let mut normal = DVec3::ZERO;
-            for k in 0..3 {
-                position += w[k] * surface.positions[t[k] as usize];
-                normal += w[k] * surface.vertex_normals[t[k] as usize];
-            }
-            let len = normal.length();
-            let normal = if len > 1e-12 { normal / len } else { surface.face_normals[face] };
-            SurfaceSample { position, normal, face: face as u32 }
-        })
-        .collect())
+    // Sample i takes draws 3i..3i + 3 of the seeded stream: drawn in parallel, the same samples.
+    Ok(crate::par::each(count, |i| {
+        let mut rng = SplitMix64::skipped(seed, 3 * i as u64);
+        let u = rng.unit() * total;
+        let face = prefix.partition_point(|&c| c <= u).min(last);
+        let (r1, r2) = (rng.unit(), rng.unit());
+        let s = r1.sqrt();
+        let w = [1.0 - s, s * (1.0 - r2), s * r2];
+        let t = surface.triangles[face];
+        let mut position = DVec3::ZERO;
+        let mut normal = DVec3::ZERO;
+        for k in 0..3 {
+            position += w[k] * surface.positions[t[k] as usize];
+            normal += w[k] * surface.vertex_normals[t[k] as usize];
+        }
+        let len = normal.length();
+        let normal = if len > 1e-12 { normal / len } else { surface.face_normals[face] };
+        SurfaceSample { position, normal, face: face as u32 }
+    }))
 }
 
 fn check_surface(surface: &Surface) -> Result<(), VerifyError> {
@@ -261,8 +260,10 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
 /// `surface`: see the module docs for what is measured.
 pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions) -> Result<Verification, VerifyError> {
     let (r, h, cell, search) = check_options(options)?;
-    let samples = sample_surface(surface, options.samples, options.seed)?;
-    let volume = SweptVolume::new(passes, r)?;
+    // Independent: the samples come from the surface alone.
+    let (samples, volume) =
+        crate::par::join(|| sample_surface(surface, options.samples, options.seed), || SweptVolume::new(passes, r));
+    let (samples, volume) = (samples?, volume?);
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
     let mut scallops = Vec::with_capacity(samples.len());
     let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
