@@ -31,16 +31,46 @@ impl Node {
 
 /// The tree over items with boxes `bounds[i] = (lo, hi)` and midpoints `mids[i]`: its nodes and
 /// the leaf order (`order[slot]` = item id).
+///
+/// The shape of a subtree depends only on its item count, so both halves of a split know where
+/// their nodes go before either is built: large subtrees are built side by side into their own
+/// parts of the node array, and the tree is the same on any number of threads.
 pub(crate) fn build(bounds: &[(DVec3, DVec3)], mids: &[DVec3]) -> (Vec<Node>, Vec<u32>) {
     let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
-    let mut nodes = Vec::with_capacity(2 * bounds.len() / LEAF_SIZE + 1);
-    if !bounds.is_empty() {
-        node(bounds, mids, &mut order, 0, &mut nodes);
+    if bounds.is_empty() {
+        return (Vec::new(), order);
     }
+    let empty = Node { lo: DVec3::ZERO, hi: DVec3::ZERO, start: 0, count: 0, right: 0 };
+    let mut nodes = vec![empty; node_count(bounds.len())];
+    node(bounds, mids, &mut order, 0, 0, &mut nodes);
     (nodes, order)
 }
 
-fn node(bounds: &[(DVec3, DVec3)], mids: &[DVec3], ids: &mut [u32], start: usize, nodes: &mut Vec<Node>) -> u32 {
+/// Nodes of a subtree over `m ≥ 1` items (leaves of at most [`LEAF_SIZE`], halves of
+/// `m / 2` and `m − m / 2`). Repeated halving leaves sizes ⌊m/2^d⌋ and ⌈m/2^d⌉ at depth d, the
+/// larger `m mod 2^d` times; every node above the last split level e − 1 is split, so the leaves
+/// are counted there.
+fn node_count(m: usize) -> usize {
+    if m <= LEAF_SIZE {
+        return 1;
+    }
+    // e − 1: the deepest level whose largest node is still split.
+    let mut d = 0;
+    while m.div_ceil(1 << (d + 1)) > LEAF_SIZE {
+        d += 1;
+    }
+    let (n, s, r) = (1usize << d, m >> d, m % (1 << d));
+    let leaves_of = |size: usize| if size > LEAF_SIZE { 2 } else { 1 };
+    let leaves = (n - r) * leaves_of(s) + r * leaves_of(s + 1);
+    2 * leaves - 1
+}
+
+/// Subtrees with more items than this are built beside their sibling.
+const PARALLEL_ITEMS: usize = 8192;
+
+/// Builds the subtree over `ids` (slots from `start`) into `out`, its nodes, whose first is the
+/// node with absolute index `index`.
+fn node(bounds: &[(DVec3, DVec3)], mids: &[DVec3], ids: &mut [u32], start: usize, index: usize, out: &mut [Node]) {
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     let (mut mlo, mut mhi) = (lo, hi);
     for &i in ids.iter() {
@@ -50,11 +80,10 @@ fn node(bounds: &[(DVec3, DVec3)], mids: &[DVec3], ids: &mut [u32], start: usize
         mlo = mlo.min(mids[i as usize]);
         mhi = mhi.max(mids[i as usize]);
     }
-    let index = nodes.len() as u32;
-    nodes.push(Node { lo, hi, start: start as u32, count: 0, right: 0 });
+    out[0] = Node { lo, hi, start: start as u32, count: 0, right: 0 };
     if ids.len() <= LEAF_SIZE {
-        nodes[index as usize].count = ids.len() as u32;
-        return index;
+        out[0].count = ids.len() as u32;
+        return;
     }
     let e = mhi - mlo;
     let axis = if e.x >= e.y && e.x >= e.z {
@@ -68,9 +97,63 @@ fn node(bounds: &[(DVec3, DVec3)], mids: &[DVec3], ids: &mut [u32], start: usize
     ids.select_nth_unstable_by(half, |&a, &b| {
         mids[a as usize][axis].total_cmp(&mids[b as usize][axis]).then(a.cmp(&b))
     });
-    let (left, right) = ids.split_at_mut(half);
-    node(bounds, mids, left, start, nodes);
-    let r = node(bounds, mids, right, start + half, nodes);
-    nodes[index as usize].right = r;
-    index
+    let left_nodes = node_count(half);
+    out[0].right = (index + 1 + left_nodes) as u32;
+    let (left_ids, right_ids) = ids.split_at_mut(half);
+    let (left_out, right_out) = out[1..].split_at_mut(left_nodes);
+    if half > PARALLEL_ITEMS {
+        crate::par::join(
+            || node(bounds, mids, left_ids, start, index + 1, left_out),
+            || node(bounds, mids, right_ids, start + half, index + 1 + left_nodes, right_out),
+        );
+    } else {
+        node(bounds, mids, left_ids, start, index + 1, left_out);
+        node(bounds, mids, right_ids, start + half, index + 1 + left_nodes, right_out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The count by building the shape.
+    fn nodes_by_recursion(m: usize) -> usize {
+        if m <= LEAF_SIZE {
+            1
+        } else {
+            1 + nodes_by_recursion(m / 2) + nodes_by_recursion(m - m / 2)
+        }
+    }
+
+    #[test]
+    fn node_count_matches_the_recursive_shape() {
+        for m in (1..5000).chain([8191, 8192, 8193, 98_765, 300_001]) {
+            assert_eq!(node_count(m), nodes_by_recursion(m), "{m} items");
+        }
+    }
+
+    #[cfg(not(target_arch = "wasm32"))] // rayon is native only
+    #[test]
+    fn the_tree_is_the_same_on_one_thread_and_on_several() {
+        // Above the parallel threshold, with ties on the split axis.
+        let n = 3 * PARALLEL_ITEMS + 17;
+        let mids: Vec<DVec3> =
+            (0..n).map(|i| DVec3::new((i % 97) as f64, ((i * 7) % 13) as f64, (i / 500) as f64)).collect();
+        let bounds: Vec<(DVec3, DVec3)> =
+            mids.iter().map(|&m| (m - DVec3::splat(0.5), m + DVec3::splat(0.5))).collect();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| build(&bounds, &mids));
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| build(&bounds, &mids));
+        assert_eq!(one.1, three.1);
+        assert_eq!(one.0.len(), node_count(n));
+        for (a, b) in one.0.iter().zip(&three.0) {
+            assert_eq!((a.lo, a.hi, a.start, a.count, a.right), (b.lo, b.hi, b.start, b.count, b.right));
+        }
+        // Every item in exactly one leaf, leaves in slot order.
+        let mut next = 0;
+        for node in one.0.iter().filter(|n| n.count > 0) {
+            assert_eq!(node.start as usize, next);
+            next += node.count as usize;
+        }
+        assert_eq!(next, n);
+    }
 }
