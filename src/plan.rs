@@ -147,8 +147,8 @@ pub struct Planner {
     pub solver: SlitMapSolver,
     /// Timings of the per-part work (`read` is the caller's, when it measured it).
     pub prepare_ms: Timings,
-    /// The facet tree for [`Facets::Exact`], built by the first plan that needs it (its time
-    /// counts in that plan's toolpath stage) and reused by every later one.
+    /// The facet tree for [`Facets::Exact`], built by the first plan that needs it (beside its
+    /// spiral, whose time then includes it) and reused by every later one.
     faces: OnceLock<FaceTree>,
 }
 
