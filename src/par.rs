@@ -103,9 +103,10 @@ where
     }
 }
 
-/// `background()` on a thread of its own while `foreground()` runs on this one (both inline, one
-/// after the other, on wasm): for stages that depend on neither's result. `foreground` may use
-/// what cannot cross threads (the caller's clock).
+/// `background()` on the pool while `foreground()` runs on this thread (both inline, one after
+/// the other, on wasm and on one thread): for stages that depend on neither's result.
+/// `foreground` may use what cannot cross threads (the caller's clock). The background job runs
+/// on the current pool (an installed one too), like every other job here.
 pub(crate) fn beside<A, B>(background: impl FnOnce() -> A + Send, foreground: impl FnOnce() -> B) -> (A, B)
 where
     A: Send,
@@ -121,12 +122,13 @@ where
             let b = foreground();
             return (background(), b);
         }
-        std::thread::scope(|s| {
-            let handle = s.spawn(background);
-            let b = foreground();
-            // A panic in the background is re-raised here, as it would have been inline.
-            (handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), b)
-        })
+        let mut a = None;
+        // A panic in the background job is re-raised when the scope ends, as it would be inline.
+        let b = rayon::in_place_scope(|s| {
+            s.spawn(|_| a = Some(background()));
+            foreground()
+        });
+        (a.expect("the scope ran its job"), b)
     }
 }
 

@@ -57,6 +57,11 @@ pub fn clear_facets(
     // Between two centres outside every ball of radius R round a facet point a move enters such
     // a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
     let short = |a: DVec3, b: DVec3| a.distance_squared(b) <= 8.0 * radius_mm * chord_tolerance_mm;
+    // Whether the straight move between two centres dips deeper than the chord tolerance.
+    let dips = |a: (DVec3, DVec3), b: (DVec3, DVec3)| {
+        let (ca, cb) = (centre(a), centre(b));
+        !short(ca, cb) && faces.segment_nearer_than(ca, cb, limit)
+    };
 
     // Each centre on its own (in parallel): off its own face first; one traversal then confirms
     // that no other facet is within R of it (most centres need no more).
@@ -78,16 +83,15 @@ pub fn clear_facets(
             return (vec![b], report);
         }
         let prev = cleared[i - 1].0;
-        let (ca, cb) = (centre(prev), centre(b));
-        if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+        if !dips(prev, b) {
             return (vec![b], report);
         }
         let mut pending = vec![(prev, b, 0usize)];
         let mut inserted = Vec::new();
-        // Depth first, left half first, so the points come out in path order.
+        // Depth first, left half first, so the points come out in path order. The whole move
+        // (depth 0) is known to dip.
         while let Some((a, b, depth)) = pending.pop() {
-            let (ca, cb) = (centre(a), centre(b));
-            if short(ca, cb) || !faces.segment_nearer_than(ca, cb, limit) {
+            if depth > 0 && !dips(a, b) {
                 inserted.push(b);
                 continue;
             }
@@ -96,7 +100,7 @@ pub fn clear_facets(
                 inserted.push(b);
                 continue;
             }
-            let mid = 0.5 * (ca + cb);
+            let mid = 0.5 * (centre(a) + centre(b));
             let dir = (a.1 + b.1).normalize_or(a.1);
             let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
             report.inserted += 1;
