@@ -29,8 +29,17 @@
 //!
 //! per vertex. |F| = 1 on Γ0 and |F| = e^{c_i} on Γi hold exactly at boundary vertices (up to
 //! rounding), whatever the mesh resolution. The pole is continuous: no vertex, no removed face;
-//! log|z−p| is subtracted analytically so h is smooth right up to p. Since log|z − p| is harmonic
-//! in the domain when p lies in a hole, the same system gives the annulus map in that case.
+//! log|z−p| is subtracted analytically so h is smooth right up to p.
+//!
+//! **Annulus mode** (p in hole j): log|z − p| is harmonic in the domain, so U = log|w| is solved
+//! for directly with the same factorised matrix: U = 0 on Γ0, a constant on each hole, zero
+//! flux through every hole but j and 2π through Γj (a unit source on hole j's merged unknown).
+//! U is then exactly discrete harmonic, and the Delaunay weights give it the discrete maximum
+//! principle, which holds even where the map crowds a far part of the domain into a band near
+//! |w| = 1 thinner than the P1 error of log|z − p| (the h formulation folded 794 faces there on
+//! featuretype). arg w = V is the conjugate of U: Neumann on every loop, period 2π round Γj; it
+//! is solved as V = arg(z − p) + θ_h with the same Neumann matrix (see `annulus_rhs`). Both
+//! depend on p only through rounding.
 //!
 //! **Rotation** (the constant of θ_h): φ is chosen so that arg w of the first vertex of the outer
 //! loop, `loops[0][0]`, is exactly 0.
@@ -54,8 +63,9 @@
 //! * at a slit tip: F has a critical point on the hole boundary there (the boundary folds back
 //!   along the arc), so image triangles within an edge of the tip are as small as the P1 error;
 //! * sliver triangles, and "ears" of the outer loop (three outer-loop vertices);
-//! * under crowding: for a pole near one end of a long part, the far end maps to a band near
-//!   |w| = 1 thinner than the P1 error.
+//! * under crowding, in disk mode: for a pole near one end of a long part, the far end maps to a
+//!   band near |w| = 1 thinner than the P1 error of log|z − p| (annulus mode solves for U and V
+//!   directly and keeps them exactly discrete harmonic there).
 //!
 //! Three measures remove the first two: the planner refines hole rims so every hole vertex has
 //! enough faces to open by 2π, splits ears, and remeshes flat regions full of needles
@@ -200,9 +210,7 @@ pub struct SlitMapOptions {
     pub check_loop_orientation: bool,
     /// Annulus mode: solve with a canonical pole of the hole (an approximate centre of its largest
     /// inscribed circle, computed once per hole) instead of the given one. Every pole in a hole
-    /// gives the same exact map, but the discrete one is most accurate when −log|z − p| is
-    /// smooth on the hole's boundary, i.e. p far from it; this also makes the result exactly
-    /// independent of where in the hole the pole is. Default true.
+    /// gives the same map up to rounding; this makes it the same bit for bit. Default true.
     pub annulus_canonical_pole: bool,
     /// Move the vertices of folded image triangles (slit tips, slivers) the least amount that
     /// unfolds them, boundary vertices along their circles (see `untangle`). Default true.
@@ -606,45 +614,10 @@ impl SlitMapSolver {
             _ => pole,
         };
 
-        // h = g + P x, g = −log|z − p| on every loop vertex and 0 inside.
-        let mut h = vec![0.0; n];
-        for (v, hv) in h.iter_mut().enumerate() {
-            if self.on_boundary[v] {
-                *hv = -num::ln((self.positions[v] - solve_pole).length());
-            }
-        }
-        // Right-hand side −Pᵀ L g, from the edges touching the boundary only.
-        let mut x = vec![0.0; self.h_chol.n()];
-        for &(i, j, wt) in &self.boundary_edges {
-            let d = wt * (h[i as usize] - h[j as usize]);
-            if let Some(a) = self.h_unknown[i as usize] {
-                x[a] -= d;
-            }
-            if let Some(b) = self.h_unknown[j as usize] {
-                x[b] += d;
-            }
-        }
-        self.h_chol.solve_in_place(&mut x);
-        for (v, hv) in h.iter_mut().enumerate() {
-            if let Some(a) = self.h_unknown[v] {
-                *hv += x[a];
-            }
-        }
-        let hole_log_radius: Vec<f64> = self.hole_unknown.iter().map(|&u| x[u]).collect();
-
-        // θ_h: L θ = b with b_i = Σ_f A_f ∇φ_i · J∇h_f. With e_k the edge opposite corner k
-        // (counter-clockwise), ∇φ_k = J e_k / (2A) and ∇h = J s / (2A), s = Σ_k h_k e_k, so
-        // J∇h = −s / (2A) and b_i = −Σ_f (J e_i) · s / (4A) = −Σ_f e_i × s / (4A).
-        let mut b = vec![0.0; n];
-        for t in self.fem_triangles.iter() {
-            let z = [self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]];
-            let e = [z[2] - z[1], z[0] - z[2], z[1] - z[0]];
-            let area4 = 2.0 * e[1].perp_dot(e[2]).abs();
-            let s = e[0] * h[t[0] as usize] + e[1] * h[t[1] as usize] + e[2] * h[t[2] as usize];
-            for k in 0..3 {
-                b[t[k] as usize] -= e[k].perp_dot(s) / area4;
-            }
-        }
+        let (h, hole_log_radius, b) = match region {
+            None => self.disk_rhs(solve_pole),
+            Some(j) => self.annulus_rhs(j, solve_pole),
+        };
         let mut y = vec![0.0; self.theta_chol.n()];
         for (v, bv) in b.iter().enumerate() {
             if let Some(a) = self.theta_unknown[v] {
@@ -696,6 +669,95 @@ impl SlitMapSolver {
             .collect();
         let pole_face = if region.is_none() { self.face_containing(pole) } else { None };
         Ok(SlitMap { w, mode, slits, pole, solve_pole, pole_face, hole_log_radius, triangles: self.triangles.clone() })
+    }
+
+    /// Disk mode: h and the hole constants from the Dirichlet data −log|z − p|, and the right-hand
+    /// side of θ_h's least-squares equations (its target field is J∇h).
+    fn disk_rhs(&self, p: DVec2) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let n = self.positions.len();
+        // h = g + P x, g = −log|z − p| on every loop vertex and 0 inside.
+        let mut h = vec![0.0; n];
+        for (v, hv) in h.iter_mut().enumerate() {
+            if self.on_boundary[v] {
+                *hv = -num::ln((self.positions[v] - p).length());
+            }
+        }
+        // Right-hand side −Pᵀ L g, from the edges touching the boundary only.
+        let mut x = vec![0.0; self.h_chol.n()];
+        for &(i, j, wt) in &self.boundary_edges {
+            let d = wt * (h[i as usize] - h[j as usize]);
+            if let Some(a) = self.h_unknown[i as usize] {
+                x[a] -= d;
+            }
+            if let Some(b) = self.h_unknown[j as usize] {
+                x[b] += d;
+            }
+        }
+        self.h_chol.solve_in_place(&mut x);
+        for (v, hv) in h.iter_mut().enumerate() {
+            if let Some(a) = self.h_unknown[v] {
+                *hv += x[a];
+            }
+        }
+        let hole_log_radius: Vec<f64> = self.hole_unknown.iter().map(|&u| x[u]).collect();
+
+        // b_i = Σ_f A_f ∇φ_i · J∇h_f. With e_k the edge opposite corner k (counter-clockwise),
+        // ∇φ_k = J e_k / (2A) and ∇h = J s / (2A), s = Σ_k h_k e_k, so J∇h = −s / (2A) and
+        // b_i = −Σ_f (J e_i) · s / (4A) = −Σ_f e_i × s / (4A).
+        let mut b = vec![0.0; n];
+        for t in self.fem_triangles.iter() {
+            let (e, area4) = self.edges(t);
+            let s = e[0] * h[t[0] as usize] + e[1] * h[t[1] as usize] + e[2] * h[t[2] as usize];
+            for k in 0..3 {
+                b[t[k] as usize] -= e[k].perp_dot(s) / area4;
+            }
+        }
+        (h, hole_log_radius, b)
+    }
+
+    /// Annulus mode (p in hole j): log|w| = U is solved for directly, since log|z − p| is
+    /// harmonic in the domain: U = 0 on Γ0, constant on every hole, zero flux through every hole
+    /// but j and flux 2π through Γj. That is the same merged-hole Laplacian with the unit source
+    /// −2π on hole j's unknown, so U is exactly discrete harmonic with non-negative weights and
+    /// keeps the discrete maximum principle: c_j ≤ U ≤ 0. Through h = U − log|z − p| it shared
+    /// the P1 error of log|z − p| instead, which exceeds the whole range of U where the map
+    /// crowds a far part of the domain against |w| = 1 (featuretype: |w| > 1 inside and 794
+    /// folded faces at one hole's pole).
+    ///
+    /// arg w = V is then the conjugate: Neumann on every loop (U is constant along each), period
+    /// 2π round hole j. Written V = arg(z − p) + θ_h with θ_h single-valued, the least-squares
+    /// equations of θ_h are L θ_h = −L a, L a assembled per triangle from the arguments unwrapped
+    /// within it (∫∇φ_i·J∇U vanishes exactly for such U), so V is discrete harmonic too.
+    fn annulus_rhs(&self, j: usize, p: DVec2) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let n = self.positions.len();
+        let mut x = vec![0.0; self.h_chol.n()];
+        x[self.hole_unknown[j - 1]] = -TAU;
+        self.h_chol.solve_in_place(&mut x);
+        let h: Vec<f64> = (0..n)
+            .map(|v| self.h_unknown[v].map_or(0.0, |a| x[a]) - num::ln((self.positions[v] - p).length()))
+            .collect();
+        let hole_log_radius: Vec<f64> = self.hole_unknown.iter().map(|&u| x[u]).collect();
+
+        // b = −L a: with ∇φ_k = J e_k / (2A) and ∇a = J s / (2A), s = Σ_k a_k e_k,
+        // A ∇φ_i · ∇a = e_i · s / (4A).
+        let arg: Vec<f64> = self.positions.iter().map(|&z| num::arg(z - p)).collect();
+        let mut b = vec![0.0; n];
+        for t in self.fem_triangles.iter() {
+            let (e, area4) = self.edges(t);
+            let a0 = arg[t[0] as usize];
+            let s = e[1] * wrap_pi(arg[t[1] as usize] - a0) + e[2] * wrap_pi(arg[t[2] as usize] - a0);
+            for k in 0..3 {
+                b[t[k] as usize] -= e[k].dot(s) / area4;
+            }
+        }
+        (h, hole_log_radius, b)
+    }
+
+    /// The edges opposite each corner of a triangle (counter-clockwise) and 4 × its area.
+    fn edges(&self, t: &[u32; 3]) -> ([DVec2; 3], f64) {
+        let z = t.map(|v| self.positions[v as usize]);
+        let e = [z[2] - z[1], z[0] - z[2], z[1] - z[0]];
+        (e, 2.0 * e[1].perp_dot(e[2]).abs())
     }
 
     /// Planar face containing `q` (the one with the largest minimum barycentric coordinate, so
