@@ -33,6 +33,9 @@ pub struct Clearance {
     /// Centres still nearer than R to a facet after the rounds (a groove narrower than the
     /// ball), and moves still dipping deeper than the tolerance after [`MAX_SPLITS`] halvings.
     pub unresolved: usize,
+    /// Cleared centres that landed on the previous one (within the toolpath's repeated-point
+    /// distance: both pushed into one pocket narrower than the ball) and were dropped.
+    pub merged: usize,
 }
 
 /// Halvings of one move that dips into a facet.
@@ -113,12 +116,21 @@ pub fn clear_facets(
     for (_, r) in &cleared {
         report.merge(r);
     }
-    let (mut out_cc, mut out_n) = (Vec::with_capacity(cc.len()), Vec::with_capacity(cc.len()));
+    let (mut out_cc, mut out_n): (Vec<DVec3>, Vec<DVec3>) =
+        (Vec::with_capacity(cc.len()), Vec::with_capacity(cc.len()));
     for (points, r) in moves {
         report.merge(&r);
-        for (q, m) in points {
-            out_cc.push(q);
-            out_n.push(m);
+        for q in points {
+            // Centres pushed into the same pocket (narrower than the ball) land on one point:
+            // the ball stays there, so the repeat is dropped.
+            if let (Some(&c), Some(&m)) = (out_cc.last(), out_n.last()) {
+                if centre(q).distance(centre((c, m))) < super::MIN_STEP_MM {
+                    report.merged += 1;
+                    continue;
+                }
+            }
+            out_cc.push(q.0);
+            out_n.push(q.1);
         }
     }
     (out_cc, out_n, report)
@@ -130,6 +142,7 @@ impl Clearance {
         self.max_move_mm = self.max_move_mm.max(other.max_move_mm);
         self.inserted += other.inserted;
         self.unresolved += other.unresolved;
+        self.merged += other.merged;
     }
 }
 
@@ -226,6 +239,30 @@ mod tests {
         // touching both facets.
         assert!(centre.x.abs() < 1e-9 && (centre.z - r / 5f64.to_radians().cos()).abs() < 1e-9, "{centre:?}");
         assert!(tree.nearest(centre, r * (1.0 - 1e-9)).is_none());
+    }
+
+    /// Regression (issue 4, mech-holes-shark after the annulus map changed its path): two
+    /// centres settling on the same point were both kept, and the toolpath refused the repeat.
+    #[test]
+    fn centres_settling_on_one_point_of_a_crease_are_merged() {
+        let (mut positions, triangles) = ridge();
+        for p in &mut positions {
+            p.z = -p.z;
+        }
+        let tree = FaceTree::new(&positions, &triangles);
+        let r = 3.0;
+        // Either side of the crease, 40 nm apart, both with the vertical normal: each ball
+        // rises out of the valley to the same height (mech's pair ended 8 nm apart), then the
+        // next one is elsewhere.
+        let s = 5f64.to_radians().tan();
+        let cc = [DVec3::new(-2e-8, 0.0, 2e-8 * s), DVec3::new(2e-8, 0.0, 2e-8 * s), DVec3::new(0.0, 1.0, 0.0)];
+        let (out, normals, report) = clear_facets(&tree, &cc, &[DVec3::Z; 3], &[], r, 1e-3);
+        assert_eq!((report.moved, report.merged, out.len()), (3, 1, 2), "{report:?}");
+        let centres: Vec<DVec3> = out.iter().zip(&normals).map(|(&p, &n)| p + r * n).collect();
+        assert!((centres[1] - centres[0] - DVec3::Y).length() < 1e-6, "{centres:?}");
+        // The path it makes is accepted.
+        let options = crate::toolpath::ToolpathOptions { radius_mm: r, ..Default::default() };
+        assert!(crate::toolpath::toolpath(&out, &normals, &options).is_ok());
     }
 
     #[test]

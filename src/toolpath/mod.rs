@@ -335,7 +335,7 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
 }
 
 /// Consecutive tips (and ball centres) closer than this are a repeated point.
-const MIN_STEP_MM: f64 = 1e-7;
+pub(crate) const MIN_STEP_MM: f64 = 1e-7;
 /// Default safe height above the highest point the tool reaches.
 const DEFAULT_SAFE_ABOVE_MM: f64 = 10.0;
 /// Steepest lead-in/lead-out tangent, as sin 45°.

@@ -111,7 +111,7 @@ export interface PlanReport {
     rho2: number;
     time_min: number;
     /** Ball centres moved off the facets (zeros with `facets: "smooth"`). */
-    clearance: { moved: number; max_move_mm: number; inserted: number; unresolved: number };
+    clearance: { moved: number; max_move_mm: number; inserted: number; unresolved: number; merged: number };
   };
   verify: {
     max_scallop_mm: number;
