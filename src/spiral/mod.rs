@@ -361,7 +361,11 @@ fn sample(
         let here = match out.last() {
             Some(p) => start_of(piece, Some(p.face))?,
             None => {
-                let p = start_of(piece, None)?;
+                // The first start is searched without a previous face, as its guess was.
+                let p = match &guess {
+                    Some((start, _)) => *start,
+                    None => start_of(piece, None)?,
+                };
                 out.push(p);
                 p
             }

@@ -116,23 +116,17 @@ pub fn clear_facets(
     for (_, r) in &cleared {
         report.merge(r);
     }
-    let (mut out_cc, mut out_n): (Vec<DVec3>, Vec<DVec3>) =
-        (Vec::with_capacity(cc.len()), Vec::with_capacity(cc.len()));
+    let mut path: Vec<(DVec3, DVec3)> = Vec::with_capacity(cc.len());
     for (points, r) in moves {
         report.merge(&r);
-        for q in points {
-            // Centres pushed into the same pocket (narrower than the ball) land on one point:
-            // the ball stays there, so the repeat is dropped.
-            if let (Some(&c), Some(&m)) = (out_cc.last(), out_n.last()) {
-                if centre(q).distance(centre((c, m))) < super::MIN_STEP_MM {
-                    report.merged += 1;
-                    continue;
-                }
-            }
-            out_cc.push(q.0);
-            out_n.push(q.1);
-        }
+        path.extend(points);
     }
+    // Centres pushed into the same pocket (narrower than the ball) land on one point: the ball
+    // stays there, so the repeat is dropped.
+    let before = path.len();
+    path.dedup_by(|b, a| centre(*b).distance(centre(*a)) < super::MIN_STEP_MM);
+    report.merged = before - path.len();
+    let (out_cc, out_n) = path.into_iter().unzip();
     (out_cc, out_n, report)
 }
 
