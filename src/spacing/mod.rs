@@ -19,6 +19,13 @@
 //! squeezes into a tiny arc); a meridian that crosses a hole's slit splits:
 //! the part above the hole must be cut by ring k, the part below by ring k+1.
 //!
+//! Between meridians the scallop can still peak: at the kinks of rings crossing long facets,
+//! across creases, where the P1 image overlaps itself below a slit tip (up to 1.3 h on the shared
+//! meshes). So each ring the meridians admit passes a gate ([`gate`], the samples of seed A-1
+//! placed where those peaks are): points of S^h along every edge and along lines |w| = const
+//! across every face of the band must lie within R of the ball-centre polylines of rings k and
+//! k+1; where some do not, the ring moves up until they do.
+//!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
 //! in annulus mode the last ring is the inner circle |w| = R_A itself (the spiral ends on it).
@@ -28,12 +35,15 @@
 //!
 //! # Invariants of the output
 //! Radii strictly decreasing in (R_min, 1) (annulus: the last one equals R_A), none within the
-//! polygonal sag of a slit radius (so a ring never runs through a slit), and every meridian
-//! cusp tested at most R from a ball centre on S^{h·target_fraction}.
+//! polygonal sag of a slit radius (so a ring never runs through a slit), every meridian
+//! cusp tested at most R from a ball centre on S^{h·target_fraction}, and every gate point of a
+//! band cut at 0.95 h, but in the bands counted by `gate_compromises` (and the last band of a
+//! disk map, closed by the ball at the pole).
 
 // `!(x > y)` is deliberate: NaN must fail every progress test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod gate;
 mod lift;
 
 pub use lift::{Lift, Lifted};
@@ -122,6 +132,9 @@ pub struct Rings {
     /// Bands spaced without their crease tests: no ring passed them (a concave crease sharper
     /// than the ball, where the surface itself leaves more than h).
     pub crease_compromises: usize,
+    /// Rings placed although the gate still found a point of their band uncut after
+    /// [`GATE_ROUNDS`] rounds.
+    pub gate_compromises: usize,
 }
 
 impl Rings {
@@ -219,6 +232,8 @@ fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
 
 struct Spacer<'a> {
     lift: Lift<'a>,
+    gate: gate::Gate<'a>,
+    gate_compromises: usize,
     slits: Vec<SlitBand>,
     mode: Mode,
     r_min: f64,
@@ -241,6 +256,17 @@ struct Spacer<'a> {
     /// arg w of the meridians that decided the last ring (see [`Spacer::next_radius`]).
     binding: Vec<f64>,
 }
+
+/// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
+const GATE_FRACTION: f64 = 0.95;
+/// Rounds of moving a ring up before the gate gives in (reported).
+const GATE_ROUNDS: usize = 4;
+/// Bisection steps per round.
+const GATE_BISECTIONS: usize = 6;
+/// The bisection cuts the failing points at this fraction of the gate's height.
+const GATE_BISECTION_MARGIN: f64 = 0.95;
+/// A gate polyline's chords stay within this fraction of h of the ring.
+const GATE_SAG: f64 = 0.02;
 
 /// A boundary vertex whose edges turn by more than this (in 3D) is a corner.
 const CORNER_TURN: f64 = 25.0 * PI / 180.0;
@@ -360,6 +386,8 @@ impl<'a> Spacer<'a> {
         }
         Self {
             lift: Lift::new(surface, map),
+            gate: gate::Gate::new(surface, map, options.radius_mm),
+            gate_compromises: 0,
             corners: corner_angles(surface, map),
             creases: creases(surface, map),
             forbidden: merged,
@@ -381,6 +409,8 @@ impl<'a> Spacer<'a> {
     fn run(mut self) -> Result<Rings, SpacingError> {
         let mut rings: Vec<Ring> = Vec::new();
         let mut last_step: Option<f64> = None;
+        // Ring k's ball-centre polyline, for the gate of the band below it.
+        let mut upper: Option<gate::RingLine> = None;
         loop {
             let hi = rings.last().map_or(1.0, |r| r.radius);
             let (mut band, hi_length) = self.band(hi, rings.is_empty(), last_step, true)?;
@@ -409,6 +439,8 @@ impl<'a> Spacer<'a> {
             if !(hi - radius > 1e-12) {
                 return Err(SpacingError::NoProgress { ring: rings.len() + 1, radius: hi });
             }
+            let (radius, centres) = self.gated(hi, radius, upper.as_ref())?;
+            upper = Some(centres);
             last_step = Some(hi - radius);
             rings.push(Ring { radius, length_mm: 0.0 });
             if rings.len() > self.options.max_rings {
@@ -424,6 +456,7 @@ impl<'a> Spacer<'a> {
             trials: self.trials,
             fold_compromises: self.fold_compromises,
             crease_compromises: self.crease_compromises,
+            gate_compromises: self.gate_compromises,
         })
     }
 
@@ -484,6 +517,109 @@ impl<'a> Spacer<'a> {
         }
         let ok = nudged;
         Ok(ok)
+    }
+
+    /// The final gate of a ring the meridians admitted at `lo` below ring `hi` (centres
+    /// `upper`; `None` for the first ring): the band's gate points ([`gate`]) must be cut at the
+    /// user's h·[`GATE_FRACTION`]. While some are not, the ring moves up, by bisection on those
+    /// points between its place and the lowest |w| among them (where the ring runs through that
+    /// point, unless the P1 image overlaps itself there), and the band is gated again, at most
+    /// [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
+    fn gated(
+        &mut self,
+        hi: f64,
+        lo: f64,
+        upper: Option<&gate::RingLine>,
+    ) -> Result<(f64, gate::RingLine), SpacingError> {
+        let (r, h) = (self.ball, self.options.scallop_mm * GATE_FRACTION);
+        fn rings<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
+            upper.into_iter().chain([lower]).collect()
+        }
+        let mut lo = lo;
+        let mut lower = self.centres(lo, None)?;
+        for _ in 0..GATE_ROUNDS {
+            let points = self.gate.points(lo, hi);
+            let bad = gate::uncut(&rings(upper, &lower), &points, r, h);
+            if bad.is_empty() {
+                return Ok((lo, lower));
+            }
+            let top = bad.iter().map(|p| p.2).fold(hi, f64::min);
+            let focus: Vec<DVec3> = bad.iter().map(|p| p.0).collect();
+            let (mut ok, mut no) = (top, lo);
+            for _ in 0..GATE_BISECTIONS {
+                let mid = 0.5 * (ok + no);
+                let centres = self.centres(mid, Some(&focus))?;
+                // With a margin: the band's next points lie beside these.
+                if gate::uncut(&rings(upper, &centres), &bad, r, GATE_BISECTION_MARGIN * h).is_empty() {
+                    ok = mid;
+                } else {
+                    no = mid;
+                }
+            }
+            lo = self.clear_of_slits(ok, hi);
+            lower = self.centres(lo, None)?;
+        }
+        self.gate_compromises += 1;
+        Ok((lo, lower))
+    }
+
+    /// `rho` moved up out of a slit's sag or a fold, unless that reaches ring `hi`.
+    fn clear_of_slits(&self, rho: f64, hi: f64) -> f64 {
+        let mut rho = rho;
+        for s in &self.slits {
+            if (rho - s.radius).abs() < s.sag && s.radius + s.sag < hi {
+                rho = s.radius + s.sag;
+            }
+        }
+        match self.forbidden.iter().find(|(lo, hi_f)| rho > *lo && rho < *hi_f) {
+            Some(&(_, hi_f)) if hi_f < hi => hi_f,
+            _ => rho,
+        }
+    }
+
+    /// Ball centres along the ring `rho`: 256 uniform angles, each step halved (to depth 14)
+    /// while its middle centre lies more than [`GATE_SAG`]·h off the chord or the chord is
+    /// longer than R/2. With `focus`, only the steps within 3R of one of its points are refined:
+    /// the others are farther than R from any point beside them, so they cut none of them.
+    fn centres(&self, rho: f64, focus: Option<&[DVec3]>) -> Result<gate::RingLine, SpacingError> {
+        const M: usize = 256;
+        let centre = |t: f64| -> Result<DVec3, SpacingError> {
+            let l = self.point(rho, t)?;
+            Ok(l.p + l.n * self.ball)
+        };
+        let angle = |i: usize| TAU * i as f64 / M as f64;
+        let base = crate::par::try_map(M + 1, |i| centre(angle(i)))?;
+        let (tol, chord) = (GATE_SAG * self.options.scallop_mm, 0.5 * self.ball);
+        // Each uniform step refined on its own (in parallel): its start and the ends of its
+        // pieces, in order.
+        let pieces = crate::par::try_map(M, |i| -> Result<Vec<(f64, DVec3)>, SpacingError> {
+            let mut out = vec![(angle(i), base[i])];
+            let near = |q: &DVec3| segment_dist2(*q, base[i], base[i + 1]) <= 9.0 * self.ball * self.ball;
+            if focus.is_some_and(|f| !f.iter().any(near)) {
+                return Ok(out);
+            }
+            // Right halves go on the stack first, so the pieces come out in order.
+            let mut stack = vec![(angle(i), base[i], angle(i + 1), base[i + 1], 0u32)];
+            while let Some((ta, ca, tb, cb, depth)) = stack.pop() {
+                let tm = 0.5 * (ta + tb);
+                let cm = if depth < 14 { Some(centre(tm)?) } else { None };
+                match cm {
+                    Some(cm) if (cm - 0.5 * (ca + cb)).length() > tol || (cb - ca).length() > chord => {
+                        stack.push((tm, cm, tb, cb, depth + 1));
+                        stack.push((ta, ca, tm, cm, depth + 1));
+                    }
+                    _ => out.push((tb, cb)),
+                }
+            }
+            out.pop(); // the next step's start
+            Ok(out)
+        })?;
+        let mut line = gate::RingLine::new(rho);
+        for (t, c) in pieces.into_iter().flatten() {
+            line.push(t, c);
+        }
+        line.push(angle(M), base[M]);
+        Ok(line)
     }
 
     /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip, outer

@@ -64,6 +64,9 @@ pub struct SpiralOptions {
     /// Largest distance between the lifted curve, or its ball-centre curve, and their chords, mm.
     /// Default 0.002.
     pub chord_tolerance_mm: f64,
+    /// Largest deviation of a ball-centre chord from its curve along the surface normal, mm
+    /// (where it counts fully against the scallop, unlike sideways); `None`: no separate limit.
+    pub normal_tolerance_mm: Option<f64>,
     /// Ball radius R of the centre curve cc + R·n, mm. Default 3.
     pub radius_mm: f64,
     /// Longest segment, mm. Default 1.
@@ -82,6 +85,7 @@ impl Default for SpiralOptions {
             direction: Direction::Inward,
             cut: Cut::Climb,
             chord_tolerance_mm: 0.002,
+            normal_tolerance_mm: None,
             radius_mm: 3.0,
             max_segment_mm: 1.0,
             max_bridge_angle_deg: 8.0,
@@ -160,6 +164,11 @@ fn check_options(o: &SpiralOptions) -> Result<(), SpiralError> {
     }
     if !(o.chord_tolerance_mm.is_finite() && o.chord_tolerance_mm > 0.0) {
         return bad(format!("chord tolerance {} mm must be a positive number", o.chord_tolerance_mm));
+    }
+    if let Some(t) = o.normal_tolerance_mm {
+        if !(t.is_finite() && t > 0.0) {
+            return bad(format!("normal chord tolerance {t} mm must be a positive number"));
+        }
     }
     if !(o.max_segment_mm.is_finite() && o.max_segment_mm > 0.0) {
         return bad(format!("maximum segment {} mm must be a positive number", o.max_segment_mm));
@@ -402,6 +411,7 @@ fn march(
     options: &SpiralOptions,
 ) -> Result<Vec<PathPoint>, SpiralError> {
     let tol = options.chord_tolerance_mm;
+    let tol_normal = options.normal_tolerance_mm.unwrap_or(f64::INFINITY);
     let radius = options.radius_mm;
     let max_seg = options.max_segment_mm;
     let (u0, u1) = piece.range();
@@ -418,8 +428,10 @@ fn march(
             let pm = eval(lift, piece, u + 0.5 * step, sense, Some(here.face))?;
             let chord = (pb.cc - here.cc).length();
             let centre = |p: &PathPoint| p.cc + radius * p.normal;
+            let off = centre(&pm) - nearest_on_segment(centre(&pm), centre(&here), centre(&pb));
             let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol
-                && segment_dist(centre(&pm), centre(&here), centre(&pb)) <= tol;
+                && off.length() <= tol
+                && off.dot(pm.normal).abs() <= tol_normal;
             if chord <= max_seg && (smooth || step <= min_step) {
                 // At the smallest step a deviating midpoint is a kink of the P1 lift.
                 break (ub, pb);
@@ -440,6 +452,13 @@ fn march(
         }
     }
     Ok(out)
+}
+
+fn nearest_on_segment(q: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 { ((q - a).dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    a + t * ab
 }
 
 fn segment_dist(q: DVec3, a: DVec3, b: DVec3) -> f64 {

@@ -125,9 +125,13 @@ export interface PlanReport {
     max_ct: number;
   };
   gouge_risk_area_mm2: number;
-  /** Rings the spacing could not prove everywhere: at P1 folds by slit tips, at concave creases sharper than the ball. */
+  /**
+   * Rings the spacing could not prove everywhere: at P1 folds by slit tips, at concave creases
+   * sharper than the ball, and where the gate still found a point of the band uncut.
+   */
   fold_compromises: number;
   crease_compromises: number;
+  gate_compromises: number;
   timings_ms: Record<string, number>;
 }
 

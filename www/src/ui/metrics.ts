@@ -39,9 +39,9 @@ function rows(plan: PlanResult, limit: number): Row[] {
     ["metric-gouge-risk", "Gouge-risk area", `${n3.format(report.gouge_risk_area_mm2)} mm²`, report.gouge_risk_area_mm2 > 0],
     [
       "metric-compromises",
-      "Rings not proven (folds / sharp creases)",
-      `${n0.format(report.fold_compromises)} / ${n0.format(report.crease_compromises)}`,
-      report.fold_compromises + report.crease_compromises > 0,
+      "Rings not proven (folds / sharp creases / gate)",
+      `${n0.format(report.fold_compromises)} / ${n0.format(report.crease_compromises)} / ${n0.format(report.gate_compromises)}`,
+      report.fold_compromises + report.crease_compromises + report.gate_compromises > 0,
     ],
     [
       "metric-origin",

@@ -1,0 +1,391 @@
+//! The final gate of a ring: seed 000 Pseudocode A-1 tests samples of S^h, and this tests the
+//! points of S^h where a band's scallop peaks between the meridians the bisection tested.
+//!
+//! The P1 map is linear in each face, so rings cross a face as parallel straight lines and the
+//! cusp between two rings lies near their middle line, wherever the meridians fell; across a
+//! crease the scallop jumps, so points along each crease edge are tested too. A point is cut when
+//! its S^h point lies within R of the ball-centre polyline of one of the two rings (capsules, as
+//! the verifier sweeps them), so a gap the meridians missed at a slit tip, a crease or near the
+//! pole is found wherever it is (stop 18 found such gaps at up to 1.3 h on the shared meshes).
+
+use crate::mesh::Surface;
+use crate::slitmap::SlitMap;
+use glam::{DVec2, DVec3};
+use std::f64::consts::{PI, TAU};
+
+/// Lines of a band are at most this many R apart on the surface.
+const STRIP: f64 = 0.25;
+/// Points along a line are this many R apart, along an edge [`EDGE_STEP`] and at least
+/// [`EDGE_MIN`] per edge.
+const LINE_STEP: f64 = 0.25;
+const EDGE_STEP: f64 = 1.0 / 16.0;
+const EDGE_MIN: f64 = 4.0;
+
+/// A point to test: surface point, unit normal, |w|, arg w.
+pub(super) type GatePoint = (DVec3, DVec3, f64, f64);
+
+/// Where each band is tested, precomputed per map.
+pub(super) struct Gate<'a> {
+    surface: &'a Surface,
+    /// Log-polar corners (arg w, |w|) per face.
+    corners: Vec<[DVec2; 3]>,
+    /// |w| range per face.
+    rho_range: Vec<(f64, f64)>,
+    /// |∇|w|| on each face (P1), 1/mm.
+    rho_gradient: Vec<f64>,
+    /// Every edge (vertex pair) with the log-polar image (arg w, |w|) of both ends, the second
+    /// angle within π of the first.
+    edges: Vec<([u32; 2], DVec2, DVec2)>,
+    /// Faces and edges by |w| (see [`ByRadius`]).
+    face_index: ByRadius,
+    edge_index: ByRadius,
+    radius_mm: f64,
+}
+
+/// Items with a |w| range, for "which overlap (lo, hi)": the narrow ones sorted by their top,
+/// so that those overlapping are a run of tops in (lo, hi + widest narrow span); the few wider
+/// than [`WIDE`] (around the pole) are always looked at.
+struct ByRadius {
+    narrow: Vec<(f64, u32)>,
+    span: f64,
+    wide: Vec<u32>,
+}
+
+const WIDE: f64 = 0.02;
+
+impl ByRadius {
+    fn new(ranges: impl Iterator<Item = (f64, f64)>) -> Self {
+        let (mut narrow, mut wide, mut span) = (Vec::new(), Vec::new(), 0.0f64);
+        for (i, (lo, hi)) in ranges.enumerate() {
+            if hi - lo > WIDE {
+                wide.push(i as u32);
+            } else {
+                span = span.max(hi - lo);
+                narrow.push((hi, i as u32));
+            }
+        }
+        narrow.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        Self { narrow, span, wide }
+    }
+
+    /// Candidates for overlapping (lo, hi), each once.
+    fn near(&self, lo: f64, hi: f64) -> impl Iterator<Item = usize> + '_ {
+        let a = self.narrow.partition_point(|x| x.0 <= lo);
+        let b = self.narrow.partition_point(|x| x.0 < hi + self.span);
+        self.narrow[a..b.max(a)].iter().map(|x| x.1 as usize).chain(self.wide.iter().map(|&i| i as usize))
+    }
+}
+
+impl<'a> Gate<'a> {
+    pub(super) fn new(surface: &'a Surface, map: &SlitMap, radius_mm: f64) -> Self {
+        let corners = map.log_polar_corners();
+        let rho_range =
+            corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
+        let rho_gradient = surface
+            .triangles
+            .iter()
+            .zip(&corners)
+            .map(|(t, c)| {
+                let [a, b, d] = t.map(|v| surface.positions[v as usize]);
+                let (e1, e2) = (b - a, d - a);
+                let n = e1.cross(e2);
+                let area2 = n.length_squared();
+                if !(area2 > 0.0) {
+                    return f64::INFINITY;
+                }
+                // ∇f = ((f1 − f0)(e2 × n) + (f2 − f0)(n × e1)) / |n|².
+                let g = ((c[1].y - c[0].y) * e2.cross(n) + (c[2].y - c[0].y) * n.cross(e1)) / area2;
+                g.length()
+            })
+            .collect();
+        let mut edges: Vec<[u32; 2]> = surface
+            .triangles
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        let strip = |v: u32| {
+            let w = map.w[v as usize];
+            DVec2::new(crate::num::atan2(w.y, w.x), w.length())
+        };
+        let edges = edges
+            .into_iter()
+            .map(|e| {
+                let (a, mut b) = (strip(e[0]), strip(e[1]));
+                b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
+                (e, a, b)
+            })
+            .collect();
+        let rho_range: Vec<(f64, f64)> = rho_range;
+        let face_index = ByRadius::new(rho_range.iter().copied());
+        let edges: Vec<([u32; 2], DVec2, DVec2)> = edges;
+        let edge_index = ByRadius::new(edges.iter().map(|e| (e.1.y.min(e.2.y), e.1.y.max(e.2.y))));
+        Self { surface, corners, rho_range, rho_gradient, edges, face_index, edge_index, radius_mm }
+    }
+
+    /// The points of the band between rings `lo` < `hi` where its scallop may peak: lines
+    /// |w| = const across every face, the middle one and, where the band is wide on the surface
+    /// (near a slit tip the map squeezes a wide region into a thin band), lines splitting it into
+    /// strips at most [`STRIP`]·R wide; and the crease edges within the band.
+    pub(super) fn points(&self, lo: f64, hi: f64) -> Vec<GatePoint> {
+        let s = self.surface;
+        let mut out = Vec::new();
+        // Points spaced at most `step` (at least `min`) along the segment between two ends
+        // (position, normal, (arg w, |w|)), the middles of equal pieces.
+        let mut line = |a: End, b: End, step: f64, min: f64| {
+            let m = ((b.0 - a.0).length() / step).ceil().max(min) as usize;
+            for i in 0..m {
+                let u = (i as f64 + 0.5) / m as f64;
+                let w = a.2.lerp(b.2, u);
+                out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
+            }
+        };
+        let end = |vi: usize, vj: usize, wi: DVec2, wj: DVec2, u: f64| -> End {
+            (
+                s.positions[vi].lerp(s.positions[vj], u),
+                s.vertex_normals[vi].lerp(s.vertex_normals[vj], u),
+                wi.lerp(wj, u),
+            )
+        };
+        for f in self.face_index.near(lo, hi) {
+            let t = &s.triangles[f];
+            let (r0, r1) = self.rho_range[f];
+            if !(r1 > lo && r0 < hi) {
+                continue;
+            }
+            let width = (hi - lo) / self.rho_gradient[f];
+            let strips = (width / (STRIP * self.radius_mm)).clamp(4.0, 64.0).log2().ceil().exp2() as usize;
+            let c = self.corners[f];
+            for k in 1..strips {
+                let level = hi - (hi - lo) * k as f64 / strips as f64;
+                if !(level > r0 && level < r1) {
+                    continue;
+                }
+                let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
+                let mut found = 0;
+                for e in 0..3 {
+                    let (i, j) = (e, (e + 1) % 3);
+                    if found < 2 && ((c[i].y < level) != (c[j].y < level)) {
+                        let u = (level - c[i].y) / (c[j].y - c[i].y);
+                        ends[found] = end(t[i] as usize, t[j] as usize, c[i], c[j], u);
+                        found += 1;
+                    }
+                }
+                if found == 2 {
+                    line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0);
+                }
+            }
+        }
+        for e in self.edge_index.near(lo, hi) {
+            let ([a, b], wa, wb) = self.edges[e];
+            // The part of the edge inside the band.
+            let (u0, u1) = clip(wa.y, wb.y, lo, hi);
+            if u1 > u0 {
+                let (a, b) = (a as usize, b as usize);
+                line(end(a, b, wa, wb, u0), end(a, b, wa, wb, u1), EDGE_STEP * self.radius_mm, EDGE_MIN);
+            }
+        }
+        out
+    }
+}
+
+/// An end of a run of points: position, normal, (arg w, |w|).
+type End = (DVec3, DVec3, DVec2);
+
+/// The parameter range of the segment from |w| = `ra` to `rb` (linear) within (lo, hi).
+fn clip(ra: f64, rb: f64, lo: f64, hi: f64) -> (f64, f64) {
+    if ra == rb {
+        return if ra > lo && ra < hi { (0.0, 1.0) } else { (1.0, 0.0) };
+    }
+    let (u_lo, u_hi) = ((lo - ra) / (rb - ra), (hi - ra) / (rb - ra));
+    (u_lo.min(u_hi).max(0.0), u_lo.max(u_hi).min(1.0))
+}
+
+/// A ring's ball-centre polyline with the angle of each centre (ascending over [0, 2π]).
+#[derive(Debug, Clone)]
+pub(super) struct RingLine {
+    rho: f64,
+    theta: Vec<f64>,
+    centres: Vec<DVec3>,
+}
+
+impl RingLine {
+    pub(super) fn new(rho: f64) -> Self {
+        Self { rho, theta: Vec::new(), centres: Vec::new() }
+    }
+
+    pub(super) fn push(&mut self, theta: f64, centre: DVec3) {
+        if self.centres.last() != Some(&centre) {
+            self.theta.push(theta);
+            self.centres.push(centre);
+        }
+    }
+
+    /// Whether a segment within [`LOCAL_SEGMENTS`] of angle `theta` lies within `r` of `q`:
+    /// the fast answer for a point of a band, whose nearest centres are almost always on its
+    /// own meridian. `false` is not conclusive.
+    fn near_theta_within(&self, q: DVec3, theta: f64, r: f64) -> bool {
+        let n = self.centres.len();
+        if n < 2 {
+            return self.centres.first().is_some_and(|c| c.distance_squared(q) <= r * r);
+        }
+        let t = theta.rem_euclid(TAU);
+        let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
+        // The ring closes: centre n − 1 is centre 0, so segments wrap modulo n − 1.
+        let m = (n - 1) as isize;
+        // Outwards from the point's own angle, where the answer almost always is.
+        (0..=2 * LOCAL_SEGMENTS).any(|k| {
+            let offset = if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 };
+            let j = (i as isize + offset).rem_euclid(m) as usize;
+            super::segment_dist2(q, self.centres[j], self.centres[j + 1]) <= r * r
+        })
+    }
+}
+
+/// Segments searched on each side of a point's angle before the grid is asked.
+const LOCAL_SEGMENTS: isize = 8;
+
+/// The points of `points` whose S^h point (height `h_mm`) no ball of radius `radius_mm` on the
+/// rings reaches.
+pub(super) fn uncut(rings: &[&RingLine], points: &[GatePoint], radius_mm: f64, h_mm: f64) -> Vec<GatePoint> {
+    let grid = std::sync::OnceLock::new();
+    let cut = crate::par::each(points.len(), |i| {
+        let &(p, n, rho, theta) = &points[i];
+        let q = p + n * h_mm;
+        // The ring nearer in |w| first.
+        let far = |ring: &&&RingLine| (ring.rho - rho).abs();
+        let (near, other) = match rings {
+            [a, b] if far(&b) < far(&a) => (Some(*b), Some(*a)),
+            [a, b] => (Some(*a), Some(*b)),
+            [a] => (Some(*a), None),
+            _ => (None, None),
+        };
+        [near, other].into_iter().flatten().any(|ring| ring.near_theta_within(q, theta, radius_mm))
+            || grid.get_or_init(|| SegmentGrid::new(rings, radius_mm)).any_within(q, radius_mm)
+    });
+    points.iter().zip(cut).filter(|(_, c)| !c).map(|(p, _)| *p).collect()
+}
+
+/// Segments of polylines binned in a uniform grid (cells of the ball radius), for "is any
+/// segment within R of q". Lookups only: the answer does not depend on the map's order.
+struct SegmentGrid<'a> {
+    cell: f64,
+    segments: Vec<(DVec3, DVec3)>,
+    bins: std::collections::HashMap<[i64; 3], Vec<u32>>,
+    _rings: std::marker::PhantomData<&'a ()>,
+}
+
+impl SegmentGrid<'_> {
+    fn new(rings: &[&RingLine], cell: f64) -> Self {
+        let mut segments = Vec::new();
+        for ring in rings.iter().map(|r| &r.centres) {
+            match ring.len() {
+                0 => {}
+                1 => segments.push((ring[0], ring[0])),
+                _ => segments.extend(ring.windows(2).map(|w| (w[0], w[1]))),
+            }
+        }
+        let key = |p: DVec3| (p / cell).floor().as_i64vec3().to_array();
+        let mut bins: std::collections::HashMap<[i64; 3], Vec<u32>> = std::collections::HashMap::new();
+        for (i, &(a, b)) in segments.iter().enumerate() {
+            let (lo, hi) = (key(a.min(b)), key(a.max(b)));
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        bins.entry([x, y, z]).or_default().push(i as u32);
+                    }
+                }
+            }
+        }
+        Self { cell, segments, bins, _rings: std::marker::PhantomData }
+    }
+
+    fn any_within(&self, q: DVec3, r: f64) -> bool {
+        let key = |p: DVec3| (p / self.cell).floor().as_i64vec3().to_array();
+        let (lo, hi) = (key(q - DVec3::splat(r)), key(q + DVec3::splat(r)));
+        let r2 = r * r;
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    let Some(bin) = self.bins.get(&[x, y, z]) else { continue };
+                    for &i in bin {
+                        let (a, b) = self.segments[i as usize];
+                        if super::segment_dist2(q, a, b) <= r2 {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::SplitMix64;
+
+    fn brute_force(rings: &[&RingLine], q: DVec3, r: f64) -> bool {
+        rings.iter().any(|ring| ring.centres.windows(2).any(|w| super::super::segment_dist2(q, w[0], w[1]) <= r * r))
+    }
+
+    /// A wavy ring of `n` centres round the z axis, angles ascending over [0, 2π].
+    fn ring(rho: f64, n: usize, rng: &mut SplitMix64) -> RingLine {
+        let mut line = RingLine::new(rho);
+        for i in 0..=n {
+            let t = TAU * i as f64 / n as f64;
+            let wobble = if i == n { 0.0 } else { 0.2 * rng.unit() };
+            let radius = if i == n { line.centres[0].truncate().length() } else { 10.0 * rho + wobble };
+            line.push(t, DVec3::new(radius * t.cos(), radius * t.sin(), 0.1 * (3.0 * t).sin()));
+        }
+        line
+    }
+
+    #[test]
+    fn the_grid_and_the_local_search_agree_with_brute_force() {
+        let mut rng = SplitMix64(0x6a7e);
+        let rings = [ring(1.0, 300, &mut rng), ring(0.9, 250, &mut rng)];
+        let refs: Vec<&RingLine> = rings.iter().collect();
+        let r = 0.6;
+        let grid = SegmentGrid::new(&refs, r);
+        let (mut cut, mut local) = (0, 0);
+        for _ in 0..20_000 {
+            let (t, s) = (TAU * rng.unit(), 8.0 + 3.0 * rng.unit());
+            let q = DVec3::new(s * t.cos(), s * t.sin(), 0.4 * (rng.unit() - 0.5));
+            let exact = brute_force(&refs, q, r);
+            assert_eq!(grid.any_within(q, r), exact, "grid at {q}");
+            // The local search may miss a cover (it is not conclusive), never invent one.
+            let near = refs.iter().any(|ring| ring.near_theta_within(q, t, r));
+            assert!(!near || exact, "local search at {q}");
+            cut += exact as usize;
+            local += near as usize;
+        }
+        // Between the rings every cover is on the point's own meridian.
+        assert!(cut > 1000 && local == cut, "cut {cut}, found locally {local}");
+        // `uncut` answers the same as brute force.
+        let points: Vec<GatePoint> = (0..2000)
+            .map(|_| {
+                let (t, s) = (TAU * rng.unit(), 8.5 + 2.0 * rng.unit());
+                (DVec3::new(s * t.cos(), s * t.sin(), 0.0), DVec3::Z, 0.0, t)
+            })
+            .collect();
+        let h = 0.05;
+        let bad = uncut(&refs, &points, r, h);
+        let expected: Vec<GatePoint> =
+            points.iter().filter(|p| !brute_force(&refs, p.0 + p.1 * h, r)).copied().collect();
+        assert_eq!(bad, expected);
+    }
+
+    #[test]
+    fn clip_keeps_the_part_of_an_edge_inside_the_band() {
+        assert_eq!(clip(0.0, 1.0, 0.25, 0.75), (0.25, 0.75));
+        assert_eq!(clip(1.0, 0.0, 0.25, 0.75), (0.25, 0.75));
+        assert_eq!(clip(0.3, 0.4, 0.25, 0.75), (0.0, 1.0));
+        let (a, b) = clip(0.8, 0.9, 0.25, 0.75);
+        assert!(a > b, "outside the band: empty");
+        let (a, b) = clip(0.5, 0.5, 0.25, 0.75);
+        assert!(a < b, "a level edge inside the band is kept");
+    }
+}
