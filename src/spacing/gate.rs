@@ -1,12 +1,15 @@
 //! The final gate of a ring: seed 000 Pseudocode A-1 tests samples of S^h, and this tests the
 //! points of S^h where a band's scallop peaks between the meridians the bisection tested.
 //!
-//! The P1 map is linear in each face, so rings cross a face as parallel straight lines and the
-//! cusp between two rings lies near their middle line, wherever the meridians fell; across a
-//! crease the scallop jumps, so points along each crease edge are tested too. A point is cut when
-//! its S^h point lies within R of the ball-centre polyline of one of the two rings (capsules, as
-//! the verifier sweeps them), so a gap the meridians missed at a slit tip, a crease or near the
-//! pole is found wherever it is (stop 18 found such gaps at up to 1.3 h on the shared meshes).
+//! The P1 map is linear in each face, so rings cross a face as parallel straight lines and bend
+//! only where they cross an edge: the band's uncut spots sit beside those kinks, on creases
+//! (where the scallop jumps), and where the image overlaps itself below a slit tip (a region the
+//! rings skip), and round the ends of holes, where the rings turn. So the points tested are
+//! points along every edge in the band, along lines |w| = const across every face of it (at
+//! least three, at most [`STRIP`]·R apart on the surface) and on a fine polar grid round each
+//! hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
+//! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
+//! such gaps at up to 1.3 h on the shared meshes).
 
 use crate::mesh::Surface;
 use crate::slitmap::SlitMap;
@@ -36,6 +39,8 @@ pub(super) struct Gate<'a> {
     /// Every edge (vertex pair) with the log-polar image (arg w, |w|) of both ends, the second
     /// angle within π of the first.
     edges: Vec<([u32; 2], DVec2, DVec2)>,
+    /// Points round the ends of every hole (see [`tip_points`]), by |w|.
+    tips: Vec<GatePoint>,
     /// Faces and edges by |w| (see [`ByRadius`]).
     face_index: ByRadius,
     edge_index: ByRadius,
@@ -79,7 +84,7 @@ impl ByRadius {
 impl<'a> Gate<'a> {
     pub(super) fn new(surface: &'a Surface, map: &SlitMap, radius_mm: f64) -> Self {
         let corners = map.log_polar_corners();
-        let rho_range =
+        let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = surface
             .triangles
@@ -109,7 +114,7 @@ impl<'a> Gate<'a> {
             let w = map.w[v as usize];
             DVec2::new(crate::num::atan2(w.y, w.x), w.length())
         };
-        let edges = edges
+        let edges: Vec<([u32; 2], DVec2, DVec2)> = edges
             .into_iter()
             .map(|e| {
                 let (a, mut b) = (strip(e[0]), strip(e[1]));
@@ -117,17 +122,17 @@ impl<'a> Gate<'a> {
                 (e, a, b)
             })
             .collect();
-        let rho_range: Vec<(f64, f64)> = rho_range;
         let face_index = ByRadius::new(rho_range.iter().copied());
-        let edges: Vec<([u32; 2], DVec2, DVec2)> = edges;
         let edge_index = ByRadius::new(edges.iter().map(|e| (e.1.y.min(e.2.y), e.1.y.max(e.2.y))));
-        Self { surface, corners, rho_range, rho_gradient, edges, face_index, edge_index, radius_mm }
+        let tips = tip_points(surface, map, &corners, radius_mm);
+        Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm }
     }
 
     /// The points of the band between rings `lo` < `hi` where its scallop may peak: lines
-    /// |w| = const across every face, the middle one and, where the band is wide on the surface
-    /// (near a slit tip the map squeezes a wide region into a thin band), lines splitting it into
-    /// strips at most [`STRIP`]·R wide; and the crease edges within the band.
+    /// |w| = const across every face, splitting the band into 4 strips or more where it is wide
+    /// on the surface (near a slit tip the map squeezes a wide region into a thin band), each at
+    /// most [`STRIP`]·R wide; points along every edge within the band; and the band's points
+    /// round the ends of holes.
     pub(super) fn points(&self, lo: f64, hi: f64) -> Vec<GatePoint> {
         let s = self.surface;
         let mut out = Vec::new();
@@ -186,9 +191,63 @@ impl<'a> Gate<'a> {
                 line(end(a, b, wa, wb, u0), end(a, b, wa, wb, u1), EDGE_STEP * self.radius_mm, EDGE_MIN);
             }
         }
+        let first = self.tips.partition_point(|p| p.2 <= lo);
+        out.extend(self.tips[first..].iter().take_while(|p| p.2 < hi));
         out
     }
 }
+
+/// Points of the surface round each end of each hole (the boundary vertices at its slit's
+/// ends), within R/2 of it on a polar grid ([`TIP_RINGS`] × [`TIP_SPOKES`]) in the tangent plane,
+/// projected onto the surface; sorted by |w|. The rings turn round a hole's end there and leave
+/// spikes narrower than the edge and line points (featuretype: 1.42 h at 0.18 R from a hole's
+/// corner, cut 2 µm away).
+fn tip_points(surface: &Surface, map: &SlitMap, corners: &[[DVec2; 3]], radius_mm: f64) -> Vec<GatePoint> {
+    let mut tips: Vec<u32> = Vec::new();
+    for slit in &map.slits {
+        let lp = &surface.loops[slit.hole];
+        for end in [slit.theta_start, slit.theta_end] {
+            let off = |v: &u32| {
+                let w = map.w[*v as usize];
+                let d = crate::num::atan2(w.y, w.x) - end;
+                (d + PI).rem_euclid(TAU) - PI
+            };
+            if let Some(&v) = lp.iter().min_by(|a, b| off(a).abs().total_cmp(&off(b).abs())) {
+                tips.push(v);
+            }
+        }
+    }
+    let tree = crate::mesh::nearest::FaceTree::new(&surface.positions, &surface.triangles);
+    let reach = 0.5 * radius_mm;
+    let mut out = Vec::new();
+    for v in tips {
+        let (p0, n0) = (surface.positions[v as usize], surface.vertex_normals[v as usize]);
+        let e1 = n0.any_orthonormal_vector();
+        let e2 = n0.cross(e1);
+        for i in 1..=TIP_RINGS {
+            let r = reach * i as f64 / TIP_RINGS as f64;
+            for j in 0..TIP_SPOKES {
+                let (sin, cos) = crate::num::sin_cos(TAU * j as f64 / TIP_SPOKES as f64);
+                let p = p0 + r * (cos * e1 + sin * e2);
+                // Off the part (in the hole, past a steep wall): nothing to test.
+                let Some(hit) = tree.nearest(p, 0.1 * r) else { continue };
+                let (t, c) = (surface.triangles[hit.face], corners[hit.face]);
+                let mut normal = DVec3::ZERO;
+                let mut w = DVec2::ZERO;
+                for k in 0..3 {
+                    normal += hit.bary[k] * surface.vertex_normals[t[k] as usize];
+                    w += hit.bary[k] * c[k];
+                }
+                out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.2.total_cmp(&b.2));
+    out
+}
+
+const TIP_RINGS: usize = 48;
+const TIP_SPOKES: usize = 96;
 
 /// An end of a run of points: position, normal, (arg w, |w|).
 type End = (DVec3, DVec3, DVec2);
@@ -254,14 +313,13 @@ pub(super) fn uncut(rings: &[&RingLine], points: &[GatePoint], radius_mm: f64, h
         let &(p, n, rho, theta) = &points[i];
         let q = p + n * h_mm;
         // The ring nearer in |w| first.
-        let far = |ring: &&&RingLine| (ring.rho - rho).abs();
-        let (near, other) = match rings {
-            [a, b] if far(&b) < far(&a) => (Some(*b), Some(*a)),
-            [a, b] => (Some(*a), Some(*b)),
-            [a] => (Some(*a), None),
-            _ => (None, None),
+        let order = match rings {
+            [a, b] if (b.rho - rho).abs() < (a.rho - rho).abs() => [Some(*b), Some(*a)],
+            [a, b] => [Some(*a), Some(*b)],
+            [a] => [Some(*a), None],
+            _ => [None, None],
         };
-        [near, other].into_iter().flatten().any(|ring| ring.near_theta_within(q, theta, radius_mm))
+        order.into_iter().flatten().any(|ring| ring.near_theta_within(q, theta, radius_mm))
             || grid.get_or_init(|| SegmentGrid::new(rings, radius_mm)).any_within(q, radius_mm)
     });
     points.iter().zip(cut).filter(|(_, c)| !c).map(|(p, _)| *p).collect()
@@ -269,14 +327,13 @@ pub(super) fn uncut(rings: &[&RingLine], points: &[GatePoint], radius_mm: f64, h
 
 /// Segments of polylines binned in a uniform grid (cells of the ball radius), for "is any
 /// segment within R of q". Lookups only: the answer does not depend on the map's order.
-struct SegmentGrid<'a> {
+struct SegmentGrid {
     cell: f64,
     segments: Vec<(DVec3, DVec3)>,
     bins: std::collections::HashMap<[i64; 3], Vec<u32>>,
-    _rings: std::marker::PhantomData<&'a ()>,
 }
 
-impl SegmentGrid<'_> {
+impl SegmentGrid {
     fn new(rings: &[&RingLine], cell: f64) -> Self {
         let mut segments = Vec::new();
         for ring in rings.iter().map(|r| &r.centres) {
@@ -298,7 +355,7 @@ impl SegmentGrid<'_> {
                 }
             }
         }
-        Self { cell, segments, bins, _rings: std::marker::PhantomData }
+        Self { cell, segments, bins }
     }
 
     fn any_within(&self, q: DVec3, r: f64) -> bool {

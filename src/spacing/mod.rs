@@ -22,9 +22,9 @@
 //! Between meridians the scallop can still peak: at the kinks of rings crossing long facets,
 //! across creases, where the P1 image overlaps itself below a slit tip (up to 1.3 h on the shared
 //! meshes). So each ring the meridians admit passes a gate ([`gate`], the samples of seed A-1
-//! placed where those peaks are): points of S^h along every edge and along lines |w| = const
-//! across every face of the band must lie within R of the ball-centre polylines of rings k and
-//! k+1; where some do not, the ring moves up until they do.
+//! placed where those peaks are): points of S^h along every edge, along lines |w| = const across
+//! every face of the band and round the ends of holes must lie within R of the ball-centre
+//! polylines of rings k and k+1; where some do not, the ring moves up until they do.
 //!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
@@ -583,30 +583,41 @@ impl<'a> Spacer<'a> {
     /// the others are farther than R from any point beside them, so they cut none of them.
     fn centres(&self, rho: f64, focus: Option<&[DVec3]>) -> Result<gate::RingLine, SpacingError> {
         const M: usize = 256;
-        let centre = |t: f64| -> Result<DVec3, SpacingError> {
-            let l = self.point(rho, t)?;
-            Ok(l.p + l.n * self.ball)
+        // Lifted as the spiral lifts the ring, each point near the face of the one before: where
+        // the P1 image overlaps itself (below a slit tip) the nearest-image lift can pick a face
+        // the spiral's continuous walk never visits, and the gate would test a ring not cut.
+        let centre = |t: f64, near: Option<u32>| -> Result<(DVec3, u32), SpacingError> {
+            let l = match near {
+                Some(f) => self.lift.polar_near(rho, t, f),
+                None => self.lift.polar(rho, t),
+            }
+            .ok_or(SpacingError::Lift { rho, theta: t })?;
+            Ok((l.p + l.n * self.ball, l.face))
         };
         let angle = |i: usize| TAU * i as f64 / M as f64;
-        let base = crate::par::try_map(M + 1, |i| centre(angle(i)))?;
+        let mut base: Vec<(DVec3, u32)> = Vec::with_capacity(M + 1);
+        for i in 0..=M {
+            base.push(centre(angle(i), base.last().map(|b| b.1))?);
+        }
         let (tol, chord) = (GATE_SAG * self.options.scallop_mm, 0.5 * self.ball);
         // Each uniform step refined on its own (in parallel): its start and the ends of its
         // pieces, in order.
         let pieces = crate::par::try_map(M, |i| -> Result<Vec<(f64, DVec3)>, SpacingError> {
-            let mut out = vec![(angle(i), base[i])];
-            let near = |q: &DVec3| segment_dist2(*q, base[i], base[i + 1]) <= 9.0 * self.ball * self.ball;
+            let ((c0, f0), (c1, f1)) = (base[i], base[i + 1]);
+            let mut out = vec![(angle(i), c0)];
+            let near = |q: &DVec3| segment_dist2(*q, c0, c1) <= 9.0 * self.ball * self.ball;
             if focus.is_some_and(|f| !f.iter().any(near)) {
                 return Ok(out);
             }
             // Right halves go on the stack first, so the pieces come out in order.
-            let mut stack = vec![(angle(i), base[i], angle(i + 1), base[i + 1], 0u32)];
-            while let Some((ta, ca, tb, cb, depth)) = stack.pop() {
+            let mut stack = vec![(angle(i), c0, f0, angle(i + 1), c1, f1, 0u32)];
+            while let Some((ta, ca, fa, tb, cb, fb, depth)) = stack.pop() {
                 let tm = 0.5 * (ta + tb);
-                let cm = if depth < 14 { Some(centre(tm)?) } else { None };
+                let cm = if depth < 14 { Some(centre(tm, Some(fa))?) } else { None };
                 match cm {
-                    Some(cm) if (cm - 0.5 * (ca + cb)).length() > tol || (cb - ca).length() > chord => {
-                        stack.push((tm, cm, tb, cb, depth + 1));
-                        stack.push((ta, ca, tm, cm, depth + 1));
+                    Some((cm, fm)) if (cm - 0.5 * (ca + cb)).length() > tol || (cb - ca).length() > chord => {
+                        stack.push((tm, cm, fm, tb, cb, fb, depth + 1));
+                        stack.push((ta, ca, fa, tm, cm, fm, depth + 1));
                     }
                     _ => out.push((tb, cb)),
                 }
@@ -618,7 +629,7 @@ impl<'a> Spacer<'a> {
         for (t, c) in pieces.into_iter().flatten() {
             line.push(t, c);
         }
-        line.push(angle(M), base[M]);
+        line.push(angle(M), base[M].0);
         Ok(line)
     }
 
