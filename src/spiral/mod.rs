@@ -18,8 +18,9 @@
 //! The curve is then lifted to the surface (inverse slit map) and sampled adaptively: a piece
 //! is split until its chord deviates from the curve by at most `chord_tolerance_mm`, both on the
 //! surface and on the ball-centre curve cc + R·n (the machine interpolates the ball linearly: a
-//! chord of a convex centre curve dips into the part, R/ρ more than the contact chord), and is
-//! at most `max_segment_mm` long.
+//! chord of a convex centre curve dips into the part, R/ρ more than the contact chord), on the
+//! centre curve also by at most `normal_tolerance_mm` along the surface normal (where the
+//! deviation raises a cusp by all of it), and is at most `max_segment_mm` long.
 //!
 //! Direction: the spiral is built inwards in the sense that puts the uncut material on the
 //! tool's right for a clockwise (M3) spindle, i.e. climb milling: clockwise seen from the tool
