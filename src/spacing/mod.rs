@@ -994,7 +994,7 @@ fn parabola_dist2(d: DVec3, u: DVec3, v: DVec3, mut t: f64) -> f64 {
 }
 
 /// Squared distance from `q` to the segment ab, and the parameter of the nearest point.
-fn segment_dist2_at(q: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
+pub(crate) fn segment_dist2_at(q: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
     let ab = b - a;
     let l2 = ab.length_squared();
     let t = if l2 > 0.0 { ((q - a).dot(ab) / l2).clamp(0.0, 1.0) } else { 0.0 };

@@ -429,7 +429,9 @@ fn march(
             let pm = eval(lift, piece, u + 0.5 * step, sense, Some(here.face))?;
             let chord = (pb.cc - here.cc).length();
             let centre = |p: &PathPoint| p.cc + radius * p.normal;
-            let off = centre(&pm) - nearest_on_segment(centre(&pm), centre(&here), centre(&pb));
+            let (ca, cb) = (centre(&here), centre(&pb));
+            let (_, t) = crate::spacing::segment_dist2_at(centre(&pm), ca, cb);
+            let off = centre(&pm) - (ca + (cb - ca) * t);
             let smooth = segment_dist(pm.cc, here.cc, pb.cc) <= tol
                 && off.length() <= tol
                 && off.dot(pm.normal).abs() <= tol_normal;
@@ -453,13 +455,6 @@ fn march(
         }
     }
     Ok(out)
-}
-
-fn nearest_on_segment(q: DVec3, a: DVec3, b: DVec3) -> DVec3 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 { ((q - a).dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
-    a + t * ab
 }
 
 fn segment_dist(q: DVec3, a: DVec3, b: DVec3) -> f64 {
