@@ -137,6 +137,17 @@ pub fn eccentric_annulus(center: DVec2, radius: f64, rings: usize) -> TriMesh {
 
 const PLATE_HOLES: [(f64, f64, f64); 3] = [(-25.0, 10.0, 12.0), (20.0, 15.0, 8.0), (10.0, -20.0, 5.0)];
 
+/// Flat 20 × 2 strip (x ∈ [0, 20], y ∈ [0, 2], z = 0) with one hole of radius 0.4 at its
+/// centre: seen from a pole at one end, the other end is crowded against |w| = 1 by about
+/// e^(−10π) (issue 3's far-field test; not a part fixture, so not in [`by_name`]).
+///
+/// Delaunay mesh, edge length ≈ 0.5, about 400 faces.
+/// Topology: 2 boundary loops, Euler characteristic 0.
+pub fn long_strip_hole() -> TriMesh {
+    let (p, t) = planar_domain_with_holes(&rect(0.0, 0.0, 20.0, 2.0), &circles(&[(10.0, 1.0, 0.4)]), 0.5, 7);
+    lift(&p, t, |_| 0.0)
+}
+
 /// Flat 100 × 80 mm plate (x ∈ [−50, 50], y ∈ [−40, 40], z = 0) with three circular holes of
 /// radii 12, 8 and 5 mm (boundary vertices exactly on the circles).
 ///

@@ -1,5 +1,6 @@
 //! mesh → flatten → slitmap on every shared mesh with holes (skipped when ../shared is absent):
-//! the invariants of the slit map hold for the centroid pole and for a pole in every hole.
+//! the invariants of the slit map hold for the centroid pole, the largest face's centre, a pole
+//! near the outer boundary and a pole in every hole; and poles near every boundary rarely fold.
 #![cfg(not(target_arch = "wasm32"))]
 
 mod common;
@@ -25,6 +26,7 @@ const HOLED: &[&str] = &[
 #[test]
 fn slit_map_invariants_on_shared_meshes() {
     let dir = common::shared_mesh_dir();
+    let (mut probes, mut folding) = (0usize, Vec::new());
     for name in HOLED {
         let Ok(bytes) = std::fs::read(dir.join(name)) else {
             eprintln!("skipped: {name} is absent");
@@ -55,10 +57,6 @@ fn slit_map_invariants_on_shared_meshes() {
         for pole in poles {
             let m = solver.map(pole).unwrap_or_else(|e| panic!("{name}: {e}"));
             let max_w = m.w.iter().map(|w| w.length()).fold(0.0, f64::max);
-            // The exact map has |w| < 1 inside; where a disk pole at one end of a long part
-            // crowds the far side into a band near |w| = 1, the P1 solution may overshoot by ~1e-5
-            // (asserted to 1e-9 for the centroid pole and every annulus pole below).
-            assert!(max_w <= 1.0 + 1e-4, "{name} {pole}: max |w| {max_w}");
             for (i, l) in domain.loops.iter().enumerate().skip(1) {
                 let r = m.hole_log_radius[i - 1].exp();
                 let spread = l.iter().map(|&v| (m.w[v as usize].length() - r).abs()).fold(0.0, f64::max);
@@ -73,25 +71,42 @@ fn slit_map_invariants_on_shared_meshes() {
                     }
                 }
             }
-            // Known P1 limitation (issue 3 note): a disk pole near one end of a long part crowds
-            // the far end into a band near |w| = 1 thinner than P1 resolves (2.6k folds on the
-            // U-shaped bracket), too many to untangle locally. Those are reported.
+            // A disk pole at one end of a long part crowds the far end into a band near |w| = 1
+            // thinner than the P1 error of log|z − p|: 2 587 faces folded so on the U-shaped
+            // bracket, 28 on featuretype near its outer loop, before the far field (issue 3).
             let flipped = m.flipped_triangles();
             eprintln!(
                 "{name}: pole {pole:.4} mode {:?} flipped {flipped} of {}, max |w| {max_w:.9}",
                 m.mode,
                 domain.triangles.len()
             );
-            // The planner's starting pole: rims refined, flat regions remeshed (featuretype, a
-            // 10-hole CAD part of 420 faces, folded 226 faces here before; issue 3), Delaunay
-            // Laplacians and the untangling pass leave no fold and no overshoot.
-            // Annulus poles: U and V are exactly discrete harmonic (featuretype folded 794 faces
-            // at hole 3's pole and inverted_triangles 329 at hole 3's when U was log|z − p| + h;
-            // issue 3).
-            if pole == centroid || m.mode != Mode::Disk {
-                assert_eq!(flipped, 0, "{name}: pole {pole} ({:?}) folds {flipped} faces", m.mode);
-                assert!(max_w <= 1.0 + 1e-9, "{name}: pole {pole} ({:?}) max |w| {max_w}", m.mode);
+            assert_eq!(flipped, 0, "{name}: pole {pole} ({:?}) folds {flipped} faces", m.mode);
+            assert!(max_w <= 1.0 + 1e-9, "{name}: pole {pole} ({:?}) max |w| {max_w}", m.mode);
+        }
+        // Poles 1, 2 and 5 % of the diagonal inside three edges of every loop. The plain
+        // formulation folded at 71 of these 454 poles; with the far field 6 fold, at slit tips
+        // (a few faces) or, on mech-holes-shark, where a narrow neck crowds the whole part.
+        for lp in &domain.loops {
+            for k in [0, lp.len() / 3, 2 * lp.len() / 3] {
+                for offset in [0.01, 0.02, 0.05] {
+                    let (u, v) = (domain.positions[lp[k] as usize], domain.positions[lp[(k + 1) % lp.len()] as usize]);
+                    let pole = (u + v) * 0.5 + (v - u).normalize().perp() * offset * (hi - lo).length();
+                    if !matches!(solver.classify_pole(pole), Ok(None)) {
+                        continue;
+                    }
+                    let m = solver.map(pole).unwrap_or_else(|e| panic!("{name}: {e}"));
+                    probes += 1;
+                    let flipped = m.flipped_triangles();
+                    let max_w = m.w.iter().map(|w| w.length()).fold(0.0, f64::max);
+                    if flipped > 0 {
+                        folding.push(format!("{name} {pole:.3}: {flipped}"));
+                    } else {
+                        assert!(max_w <= 1.0 + 1e-9, "{name}: pole {pole} max |w| {max_w}");
+                    }
+                }
             }
         }
     }
+    eprintln!("{} of {probes} poles near a boundary fold: {folding:?}", folding.len());
+    assert!(folding.len() * 50 <= probes, "{} of {probes} poles fold: {folding:?}", folding.len());
 }

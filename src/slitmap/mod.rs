@@ -67,14 +67,21 @@
 //!   band near |w| = 1 thinner than the P1 error of log|z − p| (annulus mode solves for U and V
 //!   directly and keeps them exactly discrete harmonic there).
 //!
+//! **Disk far field.** Where the plain disk formulation folds, the map is solved again with
+//! U = log|w| and V = arg w discrete harmonic away from the pole, as in annulus mode, and the
+//! singular part subtracted only near it ([`SlitMapOptions::disk_near_factor`]); the map that
+//! folds fewer faces is kept. Poles 1–5 % of the diagonal from a boundary of the shared meshes
+//! folded 71 maps of 454 before and 6 after (`tests/conformal_pipeline.rs`).
+//!
 //! Three measures remove the first two: the planner refines hole rims so every hole vertex has
 //! enough faces to open by 2π, splits ears, and remeshes flat regions full of needles
 //! (`mesh::refine`, `mesh::quality`, pole-independent); both Laplacians are assembled
 //! on the Delaunay triangulation of the same vertices (`delaunay`: non-negative cotan weights,
 //! so the discrete maximum principle holds for h); and `untangle` moves the vertices of the few
 //! remaining folded triangles by the least amount that unfolds them, boundary vertices along
-//! their circles, so every boundary invariant above is kept exactly. Crowding (hundreds of
-//! folds) is left as it is and counted by [`SlitMap::flipped_faces`].
+//! their circles, so every boundary invariant above is kept exactly. The far field removes most
+//! crowding; what remains (a narrow neck crowding a whole part) is counted by
+//! [`SlitMap::flipped_faces`].
 //!
 //! # Determinism
 //! Both factorisations and every solve run in [`crate::linalg`]'s scalar code and all
@@ -215,6 +222,14 @@ pub struct SlitMapOptions {
     /// Move the vertices of folded image triangles (slit tips, slivers) the least amount that
     /// unfolds them, boundary vertices along their circles (see `untangle`). Default true.
     pub untangle: bool,
+    /// Disk mode, when the plain formulation folds faces: the far field is tried, where the
+    /// singular part log|z − p| enters the equations of log|w| only within this multiple r of
+    /// the pole's distance to the nearest boundary (at least two edges of the pole's face),
+    /// blending out to 2r; farther out log|w| and arg w are kept exactly discrete harmonic, as in
+    /// annulus mode, so a pole near one end of a long part does not fold the far end. The map
+    /// folding fewer faces is kept. Infinity turns the far field off. Default 3: of 454 poles
+    /// near the shared meshes' boundaries, 6 fold (7 with 2 or 4, 12 with 6, 71 without).
+    pub disk_near_factor: f64,
 }
 
 impl Default for SlitMapOptions {
@@ -225,6 +240,7 @@ impl Default for SlitMapOptions {
             check_loop_orientation: true,
             annulus_canonical_pole: true,
             untangle: true,
+            disk_near_factor: 3.0,
         }
     }
 }
@@ -411,6 +427,8 @@ pub struct SlitMapSolver {
     on_boundary: Vec<bool>,
     /// Edges with at least one boundary endpoint: the only ones feeding h's right-hand side.
     boundary_edges: Vec<(u32, u32, f64)>,
+    /// Every edge's cotan weight (Delaunay), for the far-field rows of disk maps.
+    weights: Vec<(u32, u32, f64)>,
     h_chol: SparseCholesky,
     /// Unknown of θ_h per vertex; the fixed vertex is None (θ_h = 0 there).
     theta_unknown: Vec<Option<usize>>,
@@ -564,6 +582,7 @@ impl SlitMapSolver {
             hole_unknown,
             on_boundary,
             boundary_edges,
+            weights,
             h_chol,
             theta_unknown,
             theta_chol,
@@ -608,14 +627,53 @@ impl SlitMapSolver {
     /// The slit map for pole `pole`: right-hand sides and back-substitutions only.
     pub fn map(&self, pole: DVec2) -> Result<SlitMap, SlitMapError> {
         let region = self.classify_pole(pole)?;
-        let n = self.positions.len();
         let solve_pole = match region {
             Some(j) if self.options.annulus_canonical_pole => self.hole_pole[j - 1],
             _ => pole,
         };
 
+        let pole_face = if region.is_none() { self.face_containing(pole) } else { None };
+        let (mut w, mut hole_log_radius) = self.solve(region, solve_pole, pole_face, f64::INFINITY)?;
+        let factor = self.options.disk_near_factor;
+        if region.is_none() && factor.is_finite() {
+            // Where the plain formulation folds (crowding, or its P1 error at a slit tip), the
+            // far field is tried; it folds elsewhere at times, so the map that folds fewer faces
+            // is kept (the plain one on a tie: it is the more accurate where it does not fold).
+            let folds = count_folds(&w, &self.triangles);
+            if folds > 0 {
+                let (w2, hole_log_radius2) = self.solve(region, solve_pole, pole_face, factor)?;
+                if count_folds(&w2, &self.triangles) < folds {
+                    (w, hole_log_radius) = (w2, hole_log_radius2);
+                }
+            }
+        }
+
+        let mode = match region {
+            None => Mode::Disk,
+            Some(j) => Mode::Annulus { hole: j, inner_radius: num::exp(hole_log_radius[j - 1]) },
+        };
+        let slits = (1..self.loops.len())
+            .filter(|&li| Some(li) != region)
+            .map(|li| {
+                let (theta_start, theta_end) = angular_extent(&w, &self.loops[li]);
+                Slit { hole: li, radius: num::exp(hole_log_radius[li - 1]), theta_start, theta_end }
+            })
+            .collect();
+        Ok(SlitMap { w, mode, slits, pole, solve_pole, pole_face, hole_log_radius, triangles: self.triangles.clone() })
+    }
+
+    /// w per vertex and the hole constants for one formulation (`factor`: see
+    /// [`SlitMapOptions::disk_near_factor`]), rotated and untangled.
+    fn solve(
+        &self,
+        region: Option<usize>,
+        solve_pole: DVec2,
+        pole_face: Option<usize>,
+        factor: f64,
+    ) -> Result<(Vec<DVec2>, Vec<f64>), SlitMapError> {
+        let n = self.positions.len();
         let (h, hole_log_radius, b) = match region {
-            None => self.disk_rhs(solve_pole),
+            None => self.disk_rhs(solve_pole, pole_face, factor),
             Some(j) => self.annulus_rhs(j, solve_pole),
         };
         let mut y = vec![0.0; self.theta_chol.n()];
@@ -655,25 +713,23 @@ impl SlitMapSolver {
             }
             untangle::untangle(&mut w, &self.triangles, &dof, &self.vertex_faces);
         }
-
-        let mode = match region {
-            None => Mode::Disk,
-            Some(j) => Mode::Annulus { hole: j, inner_radius: num::exp(hole_log_radius[j - 1]) },
-        };
-        let slits = (1..self.loops.len())
-            .filter(|&li| Some(li) != region)
-            .map(|li| {
-                let (theta_start, theta_end) = angular_extent(&w, &self.loops[li]);
-                Slit { hole: li, radius: num::exp(hole_log_radius[li - 1]), theta_start, theta_end }
-            })
-            .collect();
-        let pole_face = if region.is_none() { self.face_containing(pole) } else { None };
-        Ok(SlitMap { w, mode, slits, pole, solve_pole, pole_face, hole_log_radius, triangles: self.triangles.clone() })
+        Ok((w, hole_log_radius))
     }
 
     /// Disk mode: h and the hole constants from the Dirichlet data −log|z − p|, and the right-hand
     /// side of θ_h's least-squares equations (its target field is J∇h).
-    fn disk_rhs(&self, p: DVec2) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    ///
+    /// Far field: with ℓ = log|z − p| interpolated per vertex, U = log|w| = ℓ + h. Solving L h = 0
+    /// makes L U = L ℓ, the P1 error of ℓ, everywhere; where the map crowds a far part of the
+    /// domain into a band near |w| = 1 that error exceeds U's range there and faces fold (2.6k on
+    /// the U-shaped bracket, issue 3). So with `factor` finite, the rows far from the pole get
+    /// L U = 0 instead (right-hand side −L ℓ for h), and their θ_h rows the annulus form −L arg
+    /// (V = arg w discrete harmonic), blended by the weight χ of `disk_far_weights`; near the
+    /// pole, where ℓ is singular, the subtraction stays. The two kinds of rows do not sum to zero
+    /// exactly, and the Neumann system needs that, so the difference is put back at the pole's
+    /// face, where V's 2π winding is. With every weight 0 (a pole far from every boundary), this
+    /// is exactly the plain formulation.
+    fn disk_rhs(&self, p: DVec2, face: Option<usize>, factor: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let n = self.positions.len();
         // h = g + P x, g = −log|z − p| on every loop vertex and 0 inside.
         let mut h = vec![0.0; n];
@@ -693,6 +749,23 @@ impl SlitMapSolver {
                 x[b] += d;
             }
         }
+        let chi = self.disk_far_weights(p, face, factor);
+        if let Some(chi) = &chi {
+            // Far rows: L h = −χ L ℓ.
+            // Floored: a pole on a vertex is allowed (its row is near, weight 0).
+            let ell: Vec<f64> =
+                self.positions.iter().map(|&z| num::ln((z - p).length().max(f64::MIN_POSITIVE))).collect();
+            for &(i, j, wt) in &self.weights {
+                let (i, j) = (i as usize, j as usize);
+                let d = wt * (ell[i] - ell[j]);
+                if let Some(a) = self.h_unknown[i] {
+                    x[a] -= chi[i] * d;
+                }
+                if let Some(b) = self.h_unknown[j] {
+                    x[b] += chi[j] * d;
+                }
+            }
+        }
         self.h_chol.solve_in_place(&mut x);
         for (v, hv) in h.iter_mut().enumerate() {
             if let Some(a) = self.h_unknown[v] {
@@ -705,14 +778,68 @@ impl SlitMapSolver {
         // ∇φ_k = J e_k / (2A) and ∇h = J s / (2A), s = Σ_k h_k e_k, so J∇h = −s / (2A) and
         // b_i = −Σ_f (J e_i) · s / (4A) = −Σ_f e_i × s / (4A).
         let mut b = vec![0.0; n];
-        for t in self.fem_triangles.iter() {
-            let (e, area4) = self.edges(t);
-            let s = e[0] * h[t[0] as usize] + e[1] * h[t[1] as usize] + e[2] * h[t[2] as usize];
-            for k in 0..3 {
-                b[t[k] as usize] -= e[k].perp_dot(s) / area4;
+        match &chi {
+            None => {
+                for t in self.fem_triangles.iter() {
+                    let (e, area4) = self.edges(t);
+                    let s = e[0] * h[t[0] as usize] + e[1] * h[t[1] as usize] + e[2] * h[t[2] as usize];
+                    for k in 0..3 {
+                        b[t[k] as usize] -= e[k].perp_dot(s) / area4;
+                    }
+                }
+            }
+            Some(chi) => {
+                // Far rows: −L arg, as in `annulus_rhs`.
+                let arg: Vec<f64> = self.positions.iter().map(|&z| num::arg(z - p)).collect();
+                for t in self.fem_triangles.iter() {
+                    let (e, area4) = self.edges(t);
+                    let s = e[0] * h[t[0] as usize] + e[1] * h[t[1] as usize] + e[2] * h[t[2] as usize];
+                    let a0 = arg[t[0] as usize];
+                    let sa = e[1] * wrap_pi(arg[t[1] as usize] - a0) + e[2] * wrap_pi(arg[t[2] as usize] - a0);
+                    for k in 0..3 {
+                        let v = t[k] as usize;
+                        b[v] -= ((1.0 - chi[v]) * e[k].perp_dot(s) + chi[v] * e[k].dot(sa)) / area4;
+                    }
+                }
+                if let Some(f) = face {
+                    let defect = b.iter().sum::<f64>() / 3.0;
+                    for &v in &self.triangles[f] {
+                        b[v as usize] -= defect;
+                    }
+                }
             }
         }
         (h, hole_log_radius, b)
+    }
+
+    /// Disk mode's far-field weight χ per vertex (see `disk_rhs`): 0 within r =
+    /// [`SlitMapOptions::disk_near_factor`] times the pole's distance to the nearest boundary (at
+    /// least twice the pole face's longest edge), 1 beyond 2r, a smoothstep between, so the two
+    /// kinds of rows blend without a seam (a sharp switch folded faces where it crossed a slit
+    /// tip). A hole's vertices all take its nearest vertex's weight, so its merged row is one
+    /// kind. `None` when every weight is 0.
+    fn disk_far_weights(&self, p: DVec2, face: Option<usize>, factor: f64) -> Option<Vec<f64>> {
+        let face = face?;
+        let boundary =
+            self.loops.iter().map(|lp| polygon_distance(&self.positions, lp, p)).fold(f64::INFINITY, f64::min);
+        let z = self.triangles[face].map(|v| self.positions[v as usize]);
+        let edge = (z[1] - z[0]).length().max((z[2] - z[1]).length()).max((z[0] - z[2]).length());
+        let r = (factor * boundary).max(2.0 * edge);
+        let mut chi: Vec<f64> = self
+            .positions
+            .iter()
+            .map(|&q| {
+                let t = ((q - p).length() / r - 1.0).clamp(0.0, 1.0);
+                t * t * (3.0 - 2.0 * t)
+            })
+            .collect();
+        for lp in &self.loops[1..] {
+            let c = lp.iter().map(|&v| chi[v as usize]).fold(1.0, f64::min);
+            for &v in lp {
+                chi[v as usize] = c;
+            }
+        }
+        chi.iter().any(|&c| c > 0.0).then_some(chi)
     }
 
     /// Annulus mode (p in hole j): log|w| = U is solved for directly, since log|z − p| is
@@ -770,6 +897,12 @@ impl SlitMapSolver {
 /// One-off slit map: builds a [`SlitMapSolver`] and maps one pole.
 pub fn slit_map(domain: &PlanarDomain, pole: DVec2, options: &SlitMapOptions) -> Result<SlitMap, SlitMapError> {
     SlitMapSolver::new(domain, options)?.map(pole)
+}
+
+/// Image triangles with non-positive signed area.
+fn count_folds(w: &[DVec2], triangles: &[[u32; 3]]) -> usize {
+    let area = |t: &[u32; 3]| (w[t[1] as usize] - w[t[0] as usize]).perp_dot(w[t[2] as usize] - w[t[0] as usize]);
+    triangles.iter().filter(|t| area(t) <= 0.0).count()
 }
 
 /// Shoelace signed area of a closed polygon given by vertex indices.

@@ -180,3 +180,53 @@ fn the_pole_face_from_the_grid_is_the_linear_scan_s() {
         assert_eq!(solver.face_containing(q), scan(q), "{q:?}");
     }
 }
+
+#[test]
+fn issue_3_a_pole_at_one_end_of_a_long_strip_does_not_fold_the_far_end() {
+    // A 20 × 2 strip: seen from a pole at one end, the far end is crowded against |w| = 1 by
+    // about e^(−π·10), under the P1 error of log|z − p|, and the plain formulation folds a third
+    // of the faces there. The far field keeps log|w| discrete harmonic and folds none.
+    let d = planar(&fixtures::long_strip_hole());
+    let solver = SlitMapSolver::new(&d, &SlitMapOptions::default()).unwrap();
+    for pole in [DVec2::new(1.0, 1.0), DVec2::new(0.5, 1.0), DVec2::new(2.0, 0.5)] {
+        let face = solver.face_containing(pole);
+        let plain = solver.solve(None, pole, face, f64::INFINITY).unwrap().0;
+        assert!(count_folds(&plain, &d.triangles) > d.triangles.len() / 5, "{pole}: the plain map no longer folds");
+        let m = solver.map(pole).unwrap();
+        assert_eq!(m.flipped_triangles(), 0, "{pole}");
+        let max_w = m.w.iter().map(|w| w.length()).fold(0.0, f64::max);
+        assert!(max_w <= 1.0 + 1e-12, "{pole}: max |w| {max_w}");
+        for &v in &d.loops[1] {
+            assert!((m.w[v as usize].length() - m.hole_log_radius[0].exp()).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn the_far_field_matches_mobius_on_the_unit_disk_and_converges() {
+    // A pole about 0.27 from the boundary: rows beyond about 0.8 from it take the far-field
+    // equations.
+    let a = DVec2::new(0.72, 0.1);
+    let mut errors = Vec::new();
+    for rings in [12, 24, 48] {
+        let d = planar(&fixtures::unit_disk(rings));
+        let solver = SlitMapSolver::new(&d, &SlitMapOptions::default()).unwrap();
+        let face = solver.face_containing(a);
+        let err = |w: &[DVec2]| {
+            d.positions
+                .iter()
+                .enumerate()
+                .map(|(v, z)| (w[v].length() - mobius(a, *z).length()).abs())
+                .fold(0.0, f64::max)
+        };
+        let far = solver.solve(None, a, face, 3.0).unwrap().0;
+        let plain = solver.solve(None, a, face, f64::INFINITY).unwrap().0;
+        assert!(far != plain, "no far-field row at {rings} rings");
+        assert_eq!(count_folds(&far, &d.triangles), 0);
+        println!("rings {rings}: max ||w| − |mobius|| far field {:.3e}, plain {:.3e}", err(&far), err(&plain));
+        assert!(err(&far) <= 2.0 * err(&plain), "{rings} rings");
+        errors.push(err(&far));
+    }
+    // P1: about 4× per halving of the edge.
+    assert!(errors[0] / errors[1] > 3.0 && errors[1] / errors[2] > 3.0, "{errors:?}");
+}
