@@ -184,9 +184,10 @@ fn eccentric_annulus_matches_mobius() {
 /// Invariants on every domain for poles in the domain, near the boundary and in each hole.
 #[test]
 fn invariants_on_holed_domains() {
-    // Poles listed with `true` must give no flipped image triangle; generated ones near the
-    // boundary of elongated parts may, through crowding (the far part of the domain maps to a
-    // sliver of area ~1e-10 near |w| = 1, below the P1 error): those flips are reported only.
+    // Every pole, near a boundary too, keeps |w| ≤ 1 and flips no image triangle.
+    // Near the boundary of elongated parts the plain map crowds the far part into a sliver near
+    // |w| = 1 below its P1 error, overshoots by up to 1e-4 and folds; the far field does not
+    // (issue 3).
     let cases: Vec<(&str, TriMesh, Vec<DVec2>)> = vec![
         ("unit_disk", fixtures::unit_disk(16), vec![DVec2::ZERO, DVec2::new(0.97, 0.0), DVec2::new(-0.5, 0.69)]),
         (
@@ -197,20 +198,19 @@ fn invariants_on_holed_domains() {
         ("plate_3_holes", fixtures::plate_3_holes(), vec![]),
         ("saddle_2_holes", fixtures::saddle_2_holes(), vec![]),
         ("freeform_4_holes", fixtures::freeform_4_holes(), vec![]),
+        ("spherical_cap_hole", fixtures::spherical_cap_hole(), vec![]),
     ];
     for (name, mesh, mut poles) in cases {
         let d = planar(&mesh);
         let solver = SlitMapSolver::new(&d, &SlitMapOptions::default()).unwrap();
-        let mut strict = vec![true; poles.len()];
         // Generic poles: the domain's centroid-ish points and one pole per hole (loop centroid).
         if poles.is_empty() {
             let c = d.positions.iter().copied().sum::<DVec2>() / d.positions.len() as f64;
             let lo = d.positions.iter().copied().fold(DVec2::MAX, DVec2::min);
             let hi = d.positions.iter().copied().fold(DVec2::MIN, DVec2::max);
-            for (p, st) in [(c, true), (lo + (hi - lo) * 0.1, false), (lo + (hi - lo) * DVec2::new(0.9, 0.5), false)] {
+            for p in [c, lo + (hi - lo) * 0.1, lo + (hi - lo) * DVec2::new(0.9, 0.5)] {
                 if matches!(solver.classify_pole(p), Ok(None)) {
                     poles.push(p);
-                    strict.push(st);
                 }
             }
             // Near the outer boundary: 10% of an edge inside from an outer edge midpoint (in the
@@ -219,14 +219,12 @@ fn invariants_on_holed_domains() {
             let mid = (d.positions[u] + d.positions[v]) * 0.5;
             let e = d.positions[v] - d.positions[u];
             poles.push(mid + e.perp() * 0.1);
-            strict.push(false);
             for lp in &d.loops[1..] {
                 poles.push(lp.iter().map(|&v| d.positions[v as usize]).sum::<DVec2>() / lp.len() as f64);
-                strict.push(true);
             }
         }
         assert!(!poles.is_empty());
-        for (pole, strict) in poles.into_iter().zip(strict) {
+        for pole in poles {
             let m = solver.map(pole).unwrap();
             let region = solver.classify_pole(pole).unwrap();
             match (region, m.mode) {
@@ -241,10 +239,8 @@ fn invariants_on_holed_domains() {
             for w in &m.w {
                 max_w = max_w.max(w.length());
             }
-            // Discrete maximum principle: exact for well-resolved poles; a pole within a fraction
-            // of an edge of a boundary may overshoot by the P1 error.
-            let w_tol = if strict { 1e-9 } else { 1e-4 };
-            assert!(max_w <= 1.0 + w_tol, "{name} pole {pole}: max |w| = {max_w}");
+            // Discrete maximum principle.
+            assert!(max_w <= 1.0 + 1e-9, "{name} pole {pole}: max |w| = {max_w}");
             for &v in &d.loops[0] {
                 assert!((m.w[v as usize].length() - 1.0).abs() < 1e-12);
             }
@@ -257,24 +253,7 @@ fn invariants_on_holed_domains() {
             }
             assert!(hole_spread < 1e-9, "{name}: hole |w| spread {hole_spread}");
             let flipped = m.flipped_triangles();
-            if strict {
-                // Only the documented P1 flips: sliver images at slit tips (two vertices on one
-                // slit hole) or in crowded regions (all |w| close to 1).
-                let areas = m.image_signed_areas();
-                let mean = areas.iter().map(|a| a.abs()).sum::<f64>() / areas.len() as f64;
-                assert!(flipped <= 2 * m.slits.len() + 2, "{name} pole {pole}: {flipped} flips");
-                for f in m.flipped_faces() {
-                    let t = d.triangles[f];
-                    let at_tip =
-                        m.slits.iter().any(|s| t.iter().filter(|&&v| d.loops[s.hole].contains(&v)).count() >= 2);
-                    let crowded = t.iter().all(|&v| m.w[v as usize].length() > 0.99);
-                    assert!(
-                        areas[f].abs() < 1e-2 * mean && (at_tip || crowded),
-                        "{name} pole {pole}: face {f} flipped, image area {} (mean {mean})",
-                        areas[f]
-                    );
-                }
-            }
+            assert_eq!(flipped, 0, "{name} pole {pole}");
             // Slits: inside the annulus/disk, angular extent < 2π, disjoint when on one circle.
             let r_min = match m.mode {
                 Mode::Annulus { inner_radius, .. } => inner_radius,
