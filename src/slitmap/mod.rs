@@ -359,7 +359,7 @@ impl SlitMap {
     /// Number of image triangles with non-positive signed area (no allocation: the origin search
     /// counts them at every pole).
     pub fn flipped_triangles(&self) -> usize {
-        self.signed_areas().filter(|&a| a <= 0.0).count()
+        count_folds(&self.w, &self.triangles)
     }
 
     /// Faces whose image has non-positive signed area (see the module docs for where P1 flips
