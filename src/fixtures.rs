@@ -3,8 +3,9 @@
 //! Every stage's tests, the benchmarks and the bundled sample part take their meshes from here, so
 //! that all of them agree on the same shapes: oracle domains with closed-form conformal maps (unit
 //! disk, concentric and eccentric annuli), part-like surfaces with holes (plate, saddle, spherical
-//! cap, freeform mould panel), a deliberately bad mesh (slivers), a closed solid whose top surface
-//! has a boss and a pocket, and fine sphere/cylinder meshes for curvature checks.
+//! cap, freeform mould panel), a CAD-style plate with a countersunk hole, a deliberately bad mesh
+//! (slivers), a closed solid whose top surface has a boss and a pocket, and fine sphere/cylinder
+//! meshes for curvature checks.
 //!
 //! Conventions: millimetres (the oracle shapes keep their natural unit size), indexed vertices
 //! (no duplicated positions), manifold, triangles counter-clockwise seen from +Z for the open
@@ -251,6 +252,40 @@ pub fn symmetric_4_holes() -> TriMesh {
     let (p, t) = planar_domain_with_holes(&rect(-40.0, -40.0, 40.0, 40.0), &circles(&SYMMETRIC_HOLES), 1.5, 0x5E7);
     let k = std::f64::consts::PI / 80.0;
     lift(&p, t, |q| 8.0 * num::cos(k * q.x) * num::cos(k * q.y))
+}
+
+/// A CAD-style plate with one countersunk hole: the 60 × 40 mm top at z = 10 (centre at the
+/// origin) and a 45° cone from radius 8 mm at z = 10 down to radius 4 mm at z = 6 (the hole's
+/// rim), 24 facets round. Triangulated as a CAD export is: long thin triangles from the
+/// cone's top edge to the eight points of the outer rectangle (corners and edge midpoints), so a
+/// planner that refines it must not spread the 45° edge's normals over the flat.
+/// Topology: 2 boundary loops, Euler characteristic 0.
+pub fn countersunk_plate() -> TriMesh {
+    let (rim, top, seg) = (4.0, 8.0, 24);
+    let mut positions = Vec::new();
+    let (bottom, fb) = push_ring(&mut positions, seg, 0.0, |t| DVec3::new(rim * num::cos(t), rim * num::sin(t), 6.0));
+    let (edge, fe) = push_ring(&mut positions, seg, 0.0, |t| DVec3::new(top * num::cos(t), top * num::sin(t), 10.0));
+    let corners = [
+        (30.0, 0.0),
+        (30.0, 20.0),
+        (0.0, 20.0),
+        (-30.0, 20.0),
+        (-30.0, 0.0),
+        (-30.0, -20.0),
+        (0.0, -20.0),
+        (30.0, -20.0),
+    ];
+    let mut outer = Vec::new();
+    let mut fo = Vec::new();
+    for (x, y) in corners {
+        outer.push(positions.len() as u32);
+        fo.push((num::atan2(y, x) / TAU).rem_euclid(1.0));
+        positions.push(DVec3::new(x, y, 10.0));
+    }
+    let mut triangles = Vec::new();
+    zip_rings(&bottom, &fb, &edge, &fe, &mut triangles);
+    zip_rings(&edge, &fe, &outer, &fo, &mut triangles);
+    TriMesh { positions, triangles }
 }
 
 /// A deliberately low-quality mesh: a gently curved 100 × 60 mm sheet (x ∈ [−50, 50],

@@ -63,7 +63,9 @@ pub struct PlanOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Facets {
-    /// The STL is the part: every ball centre is kept off every facet
+    /// The STL is the part: the ball rides the facets' own normals (recomputed after the
+    /// planner's refinement and split at edges turning more than [`CREASE_SPLIT_DEG`], see
+    /// [`Surface::with_crease_normals`]), every ball centre is kept off every facet
     /// ([`toolpath::clear_facets`]), and the verifier counts a sample deeper inside the swept
     /// ball than the path's chord tolerance as a gouge.
     Exact,
@@ -150,7 +152,15 @@ pub struct Planner {
     /// The facet tree for [`Facets::Exact`], built by the first plan that needs it (beside its
     /// spiral, whose time then includes it) and reused by every later one.
     faces: OnceLock<FaceTree>,
+    /// `surface` with its normals split at sharp creases, which the ball rides with
+    /// [`Facets::Exact`] (built by the first plan that needs it).
+    creased: OnceLock<Surface>,
 }
+
+/// Faces turning more than this are a sharp edge of the part, across which exact facets do not
+/// average normals ([`Surface::with_crease_normals`]): above the 10–15° creases of coarse
+/// tessellations of curved surfaces, below the edges of machined features (45° countersinks).
+pub const CREASE_SPLIT_DEG: f64 = 30.0;
 
 /// The result of one plan.
 pub struct Plan {
@@ -215,7 +225,16 @@ impl Planner {
         let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
         let t_slit = now() - t;
         let prepare_ms = Timings { flatten: t_flatten, slitmap: t_slit, ..Timings::default() };
-        Ok(Self { report, surface, flattening, domain, solver, prepare_ms, faces: OnceLock::new() })
+        Ok(Self {
+            report,
+            surface,
+            flattening,
+            domain,
+            solver,
+            prepare_ms,
+            faces: OnceLock::new(),
+            creased: OnceLock::new(),
+        })
     }
 
     /// Plans with `options`; `progress(stage, done, total)` is called as each stage starts.
@@ -341,7 +360,7 @@ impl Planner {
                 },
                 ..VerifyOptions::default()
             };
-            Ok(Some(verify::verify(&self.surface, &[centres], &verify_options)?))
+            Ok(Some(verify::verify(self.riding(options.facets), &[centres], &verify_options)?))
         };
         let (verification, gcode) = crate::par::beside(verify_centres, || {
             let header = header_lines(options, &origin, &rings, &summary);
@@ -389,7 +408,7 @@ impl Planner {
             scallop_mm: options.scallop_mm,
             ..SpacingOptions::default()
         };
-        let rings = spacing::spacing(&self.surface, &map, &spacing_options);
+        let rings = spacing::spacing(self.riding(options.facets), &map, &spacing_options);
         timings.spacing += now() - t;
         let rings = rings?;
         stage(2);
@@ -401,10 +420,18 @@ impl Planner {
                     self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
                 }
             },
-            || spiral::spiral(&self.surface, &map, &rings, spiral_options),
+            || spiral::spiral(self.riding(options.facets), &map, &rings, spiral_options),
         );
         timings.spiral += now() - t;
         Ok((map, rings, spiral?))
+    }
+
+    /// The surface whose normals the ball rides for `facets`.
+    fn riding(&self, facets: Facets) -> &Surface {
+        match facets {
+            Facets::Exact => self.creased.get_or_init(|| self.surface.with_crease_normals(CREASE_SPLIT_DEG)),
+            Facets::Smooth => &self.surface,
+        }
     }
 
     /// Bounding-box diagonal of the flattened domain.

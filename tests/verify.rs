@@ -457,6 +457,7 @@ fn bad_input_gives_typed_errors() {
         face_normals: vec![],
         face_areas: vec![],
         vertex_normals: vec![],
+        corner_normals: vec![],
         curvature: vec![],
     };
     assert_eq!(verify(&empty, &passes, &o), Err(VerifyError::EmptySurface));

@@ -85,6 +85,10 @@ pub struct Surface {
     pub face_areas: Vec<f64>,
     /// Angle-weighted unit vertex normals, towards the tool side.
     pub vertex_normals: Vec<DVec3>,
+    /// The normals the ball rides per face corner, where they differ from the vertex normals:
+    /// split at sharp creases for exact facets ([`Surface::with_crease_normals`]); empty = the
+    /// vertex normals.
+    pub corner_normals: Vec<[DVec3; 3]>,
     /// Per-face curvature tensor (Rusinkiewicz 2004), 1/mm; positive where convex seen from the tool.
     pub curvature: Vec<FaceCurvature>,
 }
@@ -111,6 +115,36 @@ impl Surface {
             return Err(MeshError::HighGenus { genus, loops: self.loops.len() });
         }
         Ok(())
+    }
+
+    /// The normal of corner `k` of `face` the ball rides (see [`Surface::corner_normals`]).
+    #[inline]
+    pub fn corner_normal(&self, face: usize, k: usize) -> DVec3 {
+        match self.corner_normals.get(face) {
+            Some(c) => c[k],
+            None => self.vertex_normals[self.triangles[face][k] as usize],
+        }
+    }
+
+    /// The unit normal at barycentric `bary` of `face`: the corner normals interpolated, the
+    /// face normal where they cancel.
+    pub fn normal_at(&self, face: usize, bary: [f64; 3]) -> DVec3 {
+        let n = self.corner_normal(face, 0) * bary[0]
+            + self.corner_normal(face, 1) * bary[1]
+            + self.corner_normal(face, 2) * bary[2];
+        let n = n.normalize_or_zero();
+        if n == DVec3::ZERO {
+            self.face_normals[face]
+        } else {
+            n
+        }
+    }
+
+    /// This surface with the normals of its facets as they are: recomputed from the faces and
+    /// split at creases turning more than `crease_deg` ([`geometry::crease_normals`]).
+    pub fn with_crease_normals(&self, crease_deg: f64) -> Surface {
+        let (vertex_normals, corner_normals) = geometry::crease_normals(self, crease_deg);
+        Surface { vertex_normals, corner_normals, ..self.clone() }
     }
 
     /// Total area, mm².

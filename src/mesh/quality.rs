@@ -486,6 +486,7 @@ impl Refiner {
             triangles: self.tris,
             loops,
             vertex_normals: self.vertex_normals,
+            corner_normals: Vec::new(),
         }
     }
 }

@@ -279,7 +279,7 @@ pub fn flip_coplanar(s: &Surface) -> Surface {
             0.5 * (b - a).cross(c - a).length()
         })
         .collect();
-    Surface { triangles, face_areas, ..s.clone() }
+    Surface { triangles, face_areas, corner_normals: Vec::new(), ..s.clone() }
 }
 
 /// Splits `edges` (sorted) at their midpoints with a conforming red–green subdivision.
@@ -317,6 +317,7 @@ fn split_edges(s: &Surface, edges: &[Edge]) -> Surface {
         triangles,
         loops,
         vertex_normals,
+        corner_normals: Vec::new(),
     }
 }
 

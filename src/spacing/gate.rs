@@ -36,9 +36,10 @@ pub(super) struct Gate<'a> {
     rho_range: Vec<(f64, f64)>,
     /// |∇|w|| on each face (P1), 1/mm.
     rho_gradient: Vec<f64>,
-    /// Every edge (vertex pair) with the log-polar image (arg w, |w|) of both ends, the second
-    /// angle within π of the first.
-    edges: Vec<([u32; 2], DVec2, DVec2)>,
+    /// Every edge (vertex pair) with the normals at both ends and the log-polar image (arg w,
+    /// |w|) of both ends, the second angle within π of the first; an edge on a crease where the
+    /// normals split is there once per side.
+    edges: Vec<([u32; 2], [DVec3; 2], DVec2, DVec2)>,
     /// Points round the ends of every hole (see [`tip_points`]), by |w|.
     tips: Vec<GatePoint>,
     /// Faces and edges by |w| (see [`ByRadius`]).
@@ -103,27 +104,36 @@ impl<'a> Gate<'a> {
                 g.length()
             })
             .collect();
-        let mut edges: Vec<[u32; 2]> = surface
+        let mut edges: Vec<([u32; 2], usize, usize)> = surface
             .triangles
             .iter()
-            .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+            .enumerate()
+            .flat_map(|(f, t)| {
+                (0..3).map(move |k| {
+                    let (i, j) = if t[k] < t[(k + 1) % 3] { (k, (k + 1) % 3) } else { ((k + 1) % 3, k) };
+                    ([t[i], t[j]], f, 3 * i + j)
+                })
+            })
             .collect();
         edges.sort_unstable();
-        edges.dedup();
+        let normals = |&(_, f, ij): &([u32; 2], usize, usize)| {
+            [surface.corner_normal(f, ij / 3), surface.corner_normal(f, ij % 3)]
+        };
+        edges.dedup_by(|b, a| a.0 == b.0 && normals(a) == normals(b));
         let strip = |v: u32| {
             let w = map.w[v as usize];
             DVec2::new(crate::num::atan2(w.y, w.x), w.length())
         };
-        let edges: Vec<([u32; 2], DVec2, DVec2)> = edges
-            .into_iter()
+        let edges: Vec<([u32; 2], [DVec3; 2], DVec2, DVec2)> = edges
+            .iter()
             .map(|e| {
-                let (a, mut b) = (strip(e[0]), strip(e[1]));
+                let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
                 b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
-                (e, a, b)
+                (e.0, normals(e), a, b)
             })
             .collect();
         let face_index = ByRadius::new(rho_range.iter().copied());
-        let edge_index = ByRadius::new(edges.iter().map(|e| (e.1.y.min(e.2.y), e.1.y.max(e.2.y))));
+        let edge_index = ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y))));
         let tips = tip_points(surface, map, &corners, radius_mm);
         Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm }
     }
@@ -146,12 +156,8 @@ impl<'a> Gate<'a> {
                 out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
             }
         };
-        let end = |vi: usize, vj: usize, wi: DVec2, wj: DVec2, u: f64| -> End {
-            (
-                s.positions[vi].lerp(s.positions[vj], u),
-                s.vertex_normals[vi].lerp(s.vertex_normals[vj], u),
-                wi.lerp(wj, u),
-            )
+        let end = |[vi, vj]: [usize; 2], [ni, nj]: [DVec3; 2], wi: DVec2, wj: DVec2, u: f64| -> End {
+            (s.positions[vi].lerp(s.positions[vj], u), ni.lerp(nj, u), wi.lerp(wj, u))
         };
         for f in self.face_index.near(lo, hi) {
             let t = &s.triangles[f];
@@ -173,7 +179,8 @@ impl<'a> Gate<'a> {
                     let (i, j) = (e, (e + 1) % 3);
                     if found < 2 && ((c[i].y < level) != (c[j].y < level)) {
                         let u = (level - c[i].y) / (c[j].y - c[i].y);
-                        ends[found] = end(t[i] as usize, t[j] as usize, c[i], c[j], u);
+                        let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
+                        ends[found] = end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
                         found += 1;
                     }
                 }
@@ -183,12 +190,12 @@ impl<'a> Gate<'a> {
             }
         }
         for e in self.edge_index.near(lo, hi) {
-            let ([a, b], wa, wb) = self.edges[e];
+            let ([a, b], normals, wa, wb) = self.edges[e];
             // The part of the edge inside the band.
             let (u0, u1) = clip(wa.y, wb.y, lo, hi);
             if u1 > u0 {
-                let (a, b) = (a as usize, b as usize);
-                line(end(a, b, wa, wb, u0), end(a, b, wa, wb, u1), EDGE_STEP * self.radius_mm, EDGE_MIN);
+                let ab = [a as usize, b as usize];
+                line(end(ab, normals, wa, wb, u0), end(ab, normals, wa, wb, u1), EDGE_STEP * self.radius_mm, EDGE_MIN);
             }
         }
         let first = self.tips.partition_point(|p| p.2 <= lo);
@@ -231,12 +238,11 @@ fn tip_points(surface: &Surface, map: &SlitMap, corners: &[[DVec2; 3]], radius_m
                 let p = p0 + r * (cos * e1 + sin * e2);
                 // Off the part (in the hole, past a steep wall): nothing to test.
                 let Some(hit) = tree.nearest(p, 0.1 * r) else { continue };
-                let (t, c) = (surface.triangles[hit.face], corners[hit.face]);
                 let mut normal = DVec3::ZERO;
                 let mut w = DVec2::ZERO;
-                for k in 0..3 {
-                    normal += hit.bary[k] * surface.vertex_normals[t[k] as usize];
-                    w += hit.bary[k] * c[k];
+                for (k, (&b, &c)) in hit.bary.iter().zip(&corners[hit.face]).enumerate() {
+                    normal += b * surface.corner_normal(hit.face, k);
+                    w += b * c;
                 }
                 out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
             }

@@ -199,8 +199,7 @@ impl<'a> Lift<'a> {
                 + values[vertices[2] as usize] * bary[2]
         };
         let p = at(&s.positions);
-        let n = at(&s.vertex_normals).normalize_or_zero();
-        let n = if n == DVec3::ZERO { s.face_normals[face] } else { n };
+        let n = s.normal_at(face, bary);
         Lifted { rho, theta, p, n, face: face as u32 }
     }
 }

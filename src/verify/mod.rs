@@ -6,7 +6,8 @@
 //! capsules (segment + radius R) between consecutive centres ([`SweptVolume`]).
 //!
 //! The surface is sampled afresh, area-uniformly (faces by area, uniform barycentric points, a
-//! seeded SplitMix64), with the interpolated unit normal n towards the tool ([`sample_surface`]).
+//! seeded SplitMix64), with the interpolated unit normal n towards the tool that the ball rides
+//! (the corner normals, [`Surface::corner_normal`]; [`sample_surface`]).
 //! For each sample p:
 //! * **scallop** = the smallest t ≥ 0 with p + t·n inside a capsule: the height of material left
 //!   above p along its normal. Exact: the entry of the ray into each capsule is solved in closed
@@ -163,7 +164,7 @@ pub struct SurfaceSample {
 }
 
 /// `count` area-uniform samples of the surface, seeded: a face with probability proportional to
-/// its area, a uniform point in it (barycentric (1 − √r₁, √r₁(1 − r₂), √r₁ r₂)), the vertex
+/// its area, a uniform point in it (barycentric (1 − √r₁, √r₁(1 − r₂), √r₁ r₂)), the corner
 /// normals interpolated and normalised (the face normal where they cancel).
 pub fn sample_surface(surface: &Surface, count: usize, seed: u64) -> Result<Vec<SurfaceSample>, VerifyError> {
     check_surface(surface)?;
@@ -187,7 +188,7 @@ pub fn sample_surface(surface: &Surface, count: usize, seed: u64) -> Result<Vec<
         let mut normal = DVec3::ZERO;
         for k in 0..3 {
             position += w[k] * surface.positions[t[k] as usize];
-            normal += w[k] * surface.vertex_normals[t[k] as usize];
+            normal += w[k] * surface.corner_normal(face, k);
         }
         let len = normal.length();
         let normal = if len > 1e-12 { normal / len } else { surface.face_normals[face] };
