@@ -3,7 +3,7 @@
 //! Every stage's tests, the benchmarks and the bundled sample part take their meshes from here, so
 //! that all of them agree on the same shapes: oracle domains with closed-form conformal maps (unit
 //! disk, concentric and eccentric annuli), part-like surfaces with holes (plate, saddle, spherical
-//! cap, freeform mould panel), a CAD-style plate with a countersunk hole, a deliberately bad mesh
+//! cap, freeform mould panel), a CAD-style plate with a countersunk hole, a roof with a sharp ridge, a deliberately bad mesh
 //! (slivers), a closed solid whose top surface has a boss and a pocket, and fine sphere/cylinder
 //! meshes for curvature checks.
 //!
@@ -252,6 +252,32 @@ pub fn symmetric_4_holes() -> TriMesh {
     let (p, t) = planar_domain_with_holes(&rect(-40.0, -40.0, 40.0, 40.0), &circles(&SYMMETRIC_HOLES), 1.5, 0x5E7);
     let k = std::f64::consts::PI / 80.0;
     lift(&p, t, |q| 8.0 * num::cos(k * q.x) * num::cos(k * q.y))
+}
+
+/// A 40 × 40 mm roof with a sharp ridge: two flat facets sloping 30° down from the ridge line
+/// x = 0 (z = 10 − |x|·tan 30°, so the faces turn 60° there) and an 8 × 8 mm square hole beside
+/// it (x ∈ [4, 12], y ∈ [1, 9]). A grid of 1 mm squares with vertices on the ridge, so the ridge
+/// is an edge of the mesh: a ball rolls over it and its normals must not be averaged across it.
+/// Topology: 2 boundary loops, Euler characteristic 0.
+pub fn roof_ridge() -> TriMesh {
+    let n = 40usize;
+    let w = n + 1;
+    let slope = num::tan(30f64.to_radians());
+    let at = |i: usize| -20.0 + i as f64;
+    let positions = (0..w * w).map(|k| DVec3::new(at(k % w), at(k / w), 10.0 - at(k % w).abs() * slope)).collect();
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (cx, cy) = (at(i) + 0.5, at(j) + 0.5);
+            if cx > 4.0 && cx < 12.0 && cy > 1.0 && cy < 9.0 {
+                continue;
+            }
+            let v = |di: usize, dj: usize| ((j + dj) * w + i + di) as u32;
+            triangles.push([v(0, 0), v(1, 0), v(1, 1)]);
+            triangles.push([v(0, 0), v(1, 1), v(0, 1)]);
+        }
+    }
+    TriMesh { positions, triangles }
 }
 
 /// A CAD-style plate with one countersunk hole: the 60 × 40 mm top at z = 10 (centre at the

@@ -367,6 +367,17 @@ fn issue_4_exact_facets_ride_the_flat_of_a_cad_part_flat() {
 }
 
 #[test]
+fn issue_4_exact_facets_roll_the_ball_over_a_sharp_ridge() {
+    // roof_ridge's facets turn 60° at its ridge. Its averaged normals tilted the balls beside it
+    // (1.60 h); split there, the centres jump across it, and the gate measured the band against
+    // the chord of that jump, which runs inside the arc the ball really rolls on: 1.37 h at the
+    // ridge. The gate's ring polylines now follow the arc.
+    let out = mesh::from_triangles(&fixtures::roof_ridge(), &mesh::MeshOptions::default()).expect("mesh");
+    let p = Planner::new(out, &|| 0.0).expect("planner");
+    assert_scallop_kept("roof_ridge", &p, &PlanOptions { verify_samples: 40_000, ..PlanOptions::default() });
+}
+
+#[test]
 fn issue_3_auto_plans_plate_holes_from_the_next_pole_when_the_best_one_cannot_carry_a_path() {
     // plate_holes' flat face is remeshed (it has needles); the best pole by E_min then lies next
     // to a hole, where the P1 map's images overlap and the spiral jumps 4 mm. `auto` must still

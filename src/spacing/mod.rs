@@ -579,23 +579,27 @@ impl<'a> Spacer<'a> {
 
     /// Ball centres along the ring `rho`: 256 uniform angles, each step halved (to depth 14)
     /// while its middle centre lies more than [`GATE_SAG`]·h off the chord or the chord is
-    /// longer than R/2. With `focus`, only the steps within 3R of one of its points are refined:
-    /// the others are farther than R from any point beside them, so they cut none of them.
+    /// longer than R/2. A step still jumping at that depth with its contacts together is a split
+    /// crease ([`crate::mesh::Surface::corner_normals`]): over a convex one the ball rolls round
+    /// the edge, and the polyline follows that arc (its chord ran inside it: 1.37 h at
+    /// roof_ridge's 60° ridge). With `focus`, only the steps within 3R of one of its points are
+    /// refined: the others are farther than R from any point beside them, so they cut none of
+    /// them.
     fn centres(&self, rho: f64, focus: Option<&[DVec3]>) -> Result<gate::RingLine, SpacingError> {
         const M: usize = 256;
         // Lifted as the spiral lifts the ring, each point near the face of the one before: where
         // the P1 image overlaps itself (below a slit tip) the nearest-image lift can pick a face
         // the spiral's continuous walk never visits, and the gate would test a ring not cut.
-        let centre = |t: f64, near: Option<u32>| -> Result<(DVec3, u32), SpacingError> {
+        let centre = |t: f64, near: Option<u32>| -> Result<(DVec3, u32, DVec3), SpacingError> {
             let l = match near {
                 Some(f) => self.lift.polar_near(rho, t, f),
                 None => self.lift.polar(rho, t),
             }
             .ok_or(SpacingError::Lift { rho, theta: t })?;
-            Ok((l.p + l.n * self.ball, l.face))
+            Ok((l.p + l.n * self.ball, l.face, l.p))
         };
         let angle = |i: usize| TAU * i as f64 / M as f64;
-        let mut base: Vec<(DVec3, u32)> = Vec::with_capacity(M + 1);
+        let mut base: Vec<(DVec3, u32, DVec3)> = Vec::with_capacity(M + 1);
         for i in 0..=M {
             base.push(centre(angle(i), base.last().map(|b| b.1))?);
         }
@@ -603,23 +607,39 @@ impl<'a> Spacer<'a> {
         // Each uniform step refined on its own (in parallel): its start and the ends of its
         // pieces, in order.
         let pieces = crate::par::try_map(M, |i| -> Result<Vec<(f64, DVec3)>, SpacingError> {
-            let ((c0, f0), (c1, f1)) = (base[i], base[i + 1]);
+            let ((c0, f0, p0), (c1, f1, p1)) = (base[i], base[i + 1]);
             let mut out = vec![(angle(i), c0)];
             let near = |q: &DVec3| segment_dist2(*q, c0, c1) <= 9.0 * self.ball * self.ball;
             if focus.is_some_and(|f| !f.iter().any(near)) {
                 return Ok(out);
             }
             // Right halves go on the stack first, so the pieces come out in order.
-            let mut stack = vec![(angle(i), c0, f0, angle(i + 1), c1, f1, 0u32)];
-            while let Some((ta, ca, fa, tb, cb, fb, depth)) = stack.pop() {
+            let mut stack = vec![((angle(i), c0, f0, p0), (angle(i + 1), c1, f1, p1), 0u32)];
+            while let Some(((ta, ca, fa, pa), (tb, cb, fb, pb), depth)) = stack.pop() {
                 let tm = 0.5 * (ta + tb);
                 let cm = if depth < 14 { Some(centre(tm, Some(fa))?) } else { None };
                 match cm {
-                    Some((cm, fm)) if (cm - 0.5 * (ca + cb)).length() > tol || (cb - ca).length() > chord => {
-                        stack.push((tm, cm, fm, tb, cb, fb, depth + 1));
-                        stack.push((ta, ca, fa, tm, cm, fm, depth + 1));
+                    Some((cm, fm, pm)) if (cm - 0.5 * (ca + cb)).length() > tol || (cb - ca).length() > chord => {
+                        stack.push(((tm, cm, fm, pm), (tb, cb, fb, pb), depth + 1));
+                        stack.push(((ta, ca, fa, pa), (tm, cm, fm, pm), depth + 1));
                     }
-                    _ => out.push((tb, cb)),
+                    Some(_) => out.push((tb, cb)),
+                    None => {
+                        // The normals jump here (a split crease): over a convex edge the ball
+                        // rolls round it, so its centres run on the arc there, not the chord.
+                        let (na, nb) = ((ca - pa) / self.ball, (cb - pb) / self.ball);
+                        let jump = (cb - ca).length();
+                        if jump > tol && (pb - pa).length() < 0.1 * jump && (nb - na).dot(pb - pa) > 0.0 {
+                            let e = 0.5 * (pa + pb);
+                            let turn = crate::num::acos(na.dot(nb).clamp(-1.0, 1.0));
+                            let m = ((self.ball * turn / (8.0 * self.ball * tol).sqrt()).ceil() as usize).max(1);
+                            for k in 1..m {
+                                let u = k as f64 / m as f64;
+                                out.push((ta + u * (tb - ta), e + self.ball * na.lerp(nb, u).normalize()));
+                            }
+                        }
+                        out.push((tb, cb))
+                    }
                 }
             }
             out.pop(); // the next step's start
