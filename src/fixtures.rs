@@ -3,9 +3,9 @@
 //! Every stage's tests, the benchmarks and the bundled sample part take their meshes from here, so
 //! that all of them agree on the same shapes: oracle domains with closed-form conformal maps (unit
 //! disk, concentric and eccentric annuli), part-like surfaces with holes (plate, saddle, spherical
-//! cap, freeform mould panel), a CAD-style plate with a countersunk hole, a roof with a sharp ridge, a deliberately bad mesh
-//! (slivers), a closed solid whose top surface has a boss and a pocket, and fine sphere/cylinder
-//! meshes for curvature checks.
+//! cap, freeform mould panel), CAD-style parts with sharp edges (a plate with a countersunk hole,
+//! a roof with a ridge), a deliberately bad mesh (slivers), a closed solid whose top surface has a
+//! boss and a pocket, and fine sphere/cylinder meshes for curvature checks.
 //!
 //! Conventions: millimetres (the oracle shapes keep their natural unit size), indexed vertices
 //! (no duplicated positions), manifold, triangles counter-clockwise seen from +Z for the open

@@ -80,9 +80,7 @@ pub fn build_surface(component: Component) -> Result<Surface, MeshError> {
 /// Angle-weighted vertex normals (Thürmer & Wüthrich): independent of how a region is split
 /// into triangles.
 pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], face_normals: &[DVec3]) -> Vec<DVec3> {
-    accumulate_corners(positions, triangles, |f, e1, e2| {
-        face_normals[f] * crate::num::atan2(e1.cross(e2).length(), e1.dot(e2))
-    })
+    accumulate_corners(positions, triangles, |f, e1, e2| face_normals[f] * corner_angle(e1, e2))
 }
 
 /// The normals of the facets as they are: angle-weighted vertex normals recomputed from the
@@ -100,7 +98,7 @@ pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], face_normals:
 pub fn crease_normals(s: &Surface, crease_deg: f64) -> (Vec<DVec3>, Vec<[DVec3; 3]>) {
     let nf = s.triangles.len();
     let cos_crease = crate::num::cos(crease_deg.to_radians());
-    // Union-find over the corners (3·face + k).
+    // Union-find over the corners (3·face + k), joined across every edge smoother than the crease.
     let mut parent: Vec<u32> = (0..3 * nf as u32).collect();
     fn find(parent: &mut [u32], mut x: u32) -> u32 {
         while parent[x as usize] != x {
@@ -109,24 +107,9 @@ pub fn crease_normals(s: &Surface, crease_deg: f64) -> (Vec<DVec3>, Vec<[DVec3; 
         }
         x
     }
-    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * nf);
-    for (f, t) in s.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b), f as u32));
-        }
-    }
-    edges.sort_unstable();
     let corner_of = |f: u32, v: u32| 3 * f + s.triangles[f as usize].iter().position(|&x| x == v).unwrap_or(0) as u32;
-    let mut split = vec![false; s.positions.len()];
-    for e in edges.windows(2) {
-        let ((a, b, f), (a2, b2, g)) = (e[0], e[1]);
-        if (a, b) != (a2, b2) {
-            continue;
-        }
+    for (a, b, f, g) in interior_edges(&s.triangles) {
         if s.face_normals[f as usize].dot(s.face_normals[g as usize]) < cos_crease {
-            split[a as usize] = true;
-            split[b as usize] = true;
             continue;
         }
         for v in [a, b] {
@@ -136,31 +119,24 @@ pub fn crease_normals(s: &Surface, crease_deg: f64) -> (Vec<DVec3>, Vec<[DVec3; 
             }
         }
     }
-    let fresh = vertex_normals(&s.positions, &s.triangles, &s.face_normals);
+    // Summed in the order `vertex_normals` sums: a vertex whose corners form one group gets its
+    // vertex normal, bit for bit.
     let mut sums = vec![DVec3::ZERO; 3 * nf];
     for (f, t) in s.triangles.iter().enumerate() {
         for k in 0..3 {
-            if !split[t[k] as usize] {
-                continue;
-            }
             let p = s.positions[t[k] as usize];
             let e1 = s.positions[t[(k + 1) % 3] as usize] - p;
             let e2 = s.positions[t[(k + 2) % 3] as usize] - p;
-            let root = find(&mut parent, (3 * f + k) as u32) as usize;
-            sums[root] += s.face_normals[f] * crate::num::atan2(e1.cross(e2).length(), e1.dot(e2));
+            sums[find(&mut parent, (3 * f + k) as u32) as usize] += s.face_normals[f] * corner_angle(e1, e2);
         }
     }
+    let fresh = vertex_normals(&s.positions, &s.triangles, &s.face_normals);
     let corners = (0..nf)
         .map(|f| {
-            let t = s.triangles[f];
             [0, 1, 2].map(|k| {
-                let v = t[k] as usize;
-                if !split[v] {
-                    return fresh[v];
-                }
                 let n = sums[find(&mut parent, (3 * f + k) as u32) as usize].normalize_or_zero();
                 if n == DVec3::ZERO {
-                    fresh[v]
+                    fresh[s.triangles[f][k] as usize]
                 } else {
                     n
                 }
@@ -168,6 +144,28 @@ pub fn crease_normals(s: &Surface, crease_deg: f64) -> (Vec<DVec3>, Vec<[DVec3; 
         })
         .collect();
     (fresh, corners)
+}
+
+/// The interior edges of a triangle mesh: (a, b, f, g) with a < b its vertices and f < g the two
+/// faces on it, sorted by (a, b).
+pub fn interior_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32, u32, u32)> {
+    let mut edges: Vec<(u32, u32, u32)> = triangles
+        .iter()
+        .enumerate()
+        .flat_map(|(f, t)| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]), f as u32)))
+        .collect();
+    edges.sort_unstable();
+    edges
+        .windows(2)
+        .filter(|e| (e[0].0, e[0].1) == (e[1].0, e[1].1))
+        .map(|e| (e[0].0, e[0].1, e[0].2, e[1].2))
+        .collect()
+}
+
+/// The interior angle at a corner between its edges `e1` and `e2`: the weight of the face's
+/// normal in an angle-weighted vertex normal.
+fn corner_angle(e1: DVec3, e2: DVec3) -> f64 {
+    crate::num::atan2(e1.cross(e2).length(), e1.dot(e2))
 }
 
 /// Vertex normals with the weights of Max, "Weights for computing vertex normals from facet

@@ -104,21 +104,20 @@ impl<'a> Gate<'a> {
                 g.length()
             })
             .collect();
-        let mut edges: Vec<([u32; 2], usize, usize)> = surface
+        // (vertices, face, their corners in it), lower vertex first.
+        let mut edges: Vec<([u32; 2], usize, [usize; 2])> = surface
             .triangles
             .iter()
             .enumerate()
             .flat_map(|(f, t)| {
                 (0..3).map(move |k| {
-                    let (i, j) = if t[k] < t[(k + 1) % 3] { (k, (k + 1) % 3) } else { ((k + 1) % 3, k) };
-                    ([t[i], t[j]], f, 3 * i + j)
+                    let ij = if t[k] < t[(k + 1) % 3] { [k, (k + 1) % 3] } else { [(k + 1) % 3, k] };
+                    (ij.map(|i| t[i]), f, ij)
                 })
             })
             .collect();
         edges.sort_unstable();
-        let normals = |&(_, f, ij): &([u32; 2], usize, usize)| {
-            [surface.corner_normal(f, ij / 3), surface.corner_normal(f, ij % 3)]
-        };
+        let normals = |&(_, f, ij): &([u32; 2], usize, [usize; 2])| ij.map(|i| surface.corner_normal(f, i));
         edges.dedup_by(|b, a| a.0 == b.0 && normals(a) == normals(b));
         let strip = |v: u32| {
             let w = map.w[v as usize];

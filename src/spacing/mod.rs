@@ -306,24 +306,16 @@ const CREASE_DEPTHS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
 /// the ball there, not the interpolated normals), and wavy_mesh_with_hole's worst samples all
 /// lay on its 10–14° creases, between meridians.
 fn creases(surface: &Surface, map: &SlitMap) -> Vec<(DVec2, DVec2)> {
-    let mut edges: Vec<(u32, u32, usize)> = surface
-        .triangles
-        .iter()
-        .enumerate()
-        .flat_map(|(f, t)| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]), f)))
-        .collect();
-    edges.sort_unstable();
     let strip = |v: u32| {
         let w = map.w[v as usize];
         DVec2::new(crate::num::atan2(w.y, w.x), w.length())
     };
     let cos_turn = crate::num::cos(CREASE_TURN);
-    edges
-        .windows(2)
-        .filter(|e| (e[0].0, e[0].1) == (e[1].0, e[1].1))
-        .filter(|e| surface.face_normals[e[0].2].dot(surface.face_normals[e[1].2]) < cos_turn)
-        .map(|e| {
-            let (a, mut b) = (strip(e[0].0), strip(e[0].1));
+    crate::mesh::geometry::interior_edges(&surface.triangles)
+        .into_iter()
+        .filter(|&(_, _, f, g)| surface.face_normals[f as usize].dot(surface.face_normals[g as usize]) < cos_turn)
+        .map(|(a, b, _, _)| {
+            let (a, mut b) = (strip(a), strip(b));
             b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
             (a, b)
         })
@@ -632,7 +624,8 @@ impl<'a> Spacer<'a> {
                         if jump > tol && (pb - pa).length() < 0.1 * jump && (nb - na).dot(pb - pa) > 0.0 {
                             let e = 0.5 * (pa + pb);
                             let turn = crate::num::acos(na.dot(nb).clamp(-1.0, 1.0));
-                            let m = ((self.ball * turn / (8.0 * self.ball * tol).sqrt()).ceil() as usize).max(1);
+                            // Chords of the arc sag at most `tol`.
+                            let m = ((turn * (self.ball / (8.0 * tol)).sqrt()).ceil() as usize).max(1);
                             for k in 1..m {
                                 let u = k as f64 / m as f64;
                                 out.push((ta + u * (tb - ta), e + self.ball * na.lerp(nb, u).normalize()));
