@@ -17,7 +17,7 @@ use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
 use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
 use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
-use crate::spacing::{self, Rings, SpacingError, SpacingOptions};
+use crate::spacing::{self, Lift, Rings, SpacingError, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
 use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
@@ -253,7 +253,12 @@ impl Planner {
         stage(0);
         let t = now();
         let origin_options = OriginOptions { radius_mm: r, choice: options.origin, ..OriginOptions::default() };
-        let mut origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
+        // The surface the later stages ride depends on the part alone: built beside the search.
+        let (_, origin) = crate::par::beside(
+            || self.riding(options.facets),
+            || origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options),
+        );
+        let mut origin = origin?;
         timings.origin = now() - t;
         let spiral_options = SpiralOptions {
             direction: options.direction,
@@ -408,7 +413,9 @@ impl Planner {
             scallop_mm: options.scallop_mm,
             ..SpacingOptions::default()
         };
-        let rings = spacing::spacing(self.riding(options.facets), &map, &spacing_options);
+        // One inverse map for the spacing and the spiral.
+        let lift = Lift::new(self.riding(options.facets), &map);
+        let rings = spacing::spacing_on(&lift, &spacing_options);
         timings.spacing += now() - t;
         let rings = rings?;
         stage(2);
@@ -420,7 +427,7 @@ impl Planner {
                     self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
                 }
             },
-            || spiral::spiral(self.riding(options.facets), &map, &rings, spiral_options),
+            || spiral::spiral_on(&lift, &rings, spiral_options),
         );
         timings.spiral += now() - t;
         Ok((map, rings, spiral?))

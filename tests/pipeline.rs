@@ -404,3 +404,23 @@ fn issue_3_auto_plans_plate_holes_from_the_next_pole_when_the_best_one_cannot_ca
     assert_eq!(v.gouges, 0);
     assert!(v.uncovered_fraction <= 1e-3, "uncovered {}", v.uncovered_fraction);
 }
+
+/// The one-off spacing and spiral entries check that the map is one of the surface before they
+/// build its inverse (a map of another mesh indexed out of bounds in the spiral's).
+#[test]
+fn spacing_and_spiral_refuse_a_map_of_another_mesh() {
+    use slitpath::spacing::{self, SpacingError, SpacingOptions};
+    use slitpath::spiral::{self, SpiralError, SpiralOptions};
+    let planned = plan(&planner("plate_3_holes"), &PlanOptions::default());
+    let other = planner("saddle_2_holes").surface;
+    let (map_n, surface_n) = (planned.map.w.len(), other.positions.len());
+    assert_ne!(map_n, surface_n);
+    assert_eq!(
+        spacing::spacing(&other, &planned.map, &SpacingOptions::default()),
+        Err(SpacingError::MeshMismatch { map: map_n, surface: surface_n })
+    );
+    assert!(matches!(
+        spiral::spiral(&other, &planned.map, &planned.rings, &SpiralOptions::default()),
+        Err(SpiralError::MeshMismatch { map, surface }) if map == map_n && surface == surface_n
+    ));
+}

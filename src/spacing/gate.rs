@@ -27,6 +27,9 @@ const EDGE_MIN: f64 = 4.0;
 /// A point to test: surface point, unit normal, |w|, arg w.
 pub(super) type GatePoint = (DVec3, DVec3, f64, f64);
 
+/// An edge: its vertices, the normals at both ends, the log-polar image of both ends.
+type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2);
+
 /// Where each band is tested, precomputed per map.
 pub(super) struct Gate<'a> {
     surface: &'a Surface,
@@ -39,7 +42,7 @@ pub(super) struct Gate<'a> {
     /// Every edge (vertex pair) with the normals at both ends and the log-polar image (arg w,
     /// |w|) of both ends, the second angle within π of the first; an edge on a crease where the
     /// normals split is there once per side.
-    edges: Vec<([u32; 2], [DVec3; 2], DVec2, DVec2)>,
+    edges: Vec<GateEdge>,
     /// Points round the ends of every hole (see [`tip_points`]), by |w|.
     tips: Vec<GatePoint>,
     /// Faces and edges by |w| (see [`ByRadius`]).
@@ -85,6 +88,8 @@ impl ByRadius {
 impl<'a> Gate<'a> {
     pub(super) fn new(surface: &'a Surface, map: &SlitMap, radius_mm: f64) -> Self {
         let corners = map.log_polar_corners();
+        // The hole-end points (a nearest-face search) beside the edges.
+        let (tips, edges) = crate::par::join(|| tip_points(surface, map, &corners, radius_mm), || edges(surface, map));
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = surface
@@ -104,103 +109,129 @@ impl<'a> Gate<'a> {
                 g.length()
             })
             .collect();
-        // (vertices, face, their corners in it), lower vertex first.
-        let mut edges: Vec<([u32; 2], usize, [usize; 2])> = surface
-            .triangles
-            .iter()
-            .enumerate()
-            .flat_map(|(f, t)| {
-                (0..3).map(move |k| {
-                    let ij = if t[k] < t[(k + 1) % 3] { [k, (k + 1) % 3] } else { [(k + 1) % 3, k] };
-                    (ij.map(|i| t[i]), f, ij)
-                })
-            })
-            .collect();
-        edges.sort_unstable();
-        let normals = |&(_, f, ij): &([u32; 2], usize, [usize; 2])| ij.map(|i| surface.corner_normal(f, i));
-        edges.dedup_by(|b, a| a.0 == b.0 && normals(a) == normals(b));
-        let strip = |v: u32| {
-            let w = map.w[v as usize];
-            DVec2::new(crate::num::atan2(w.y, w.x), w.length())
-        };
-        let edges: Vec<([u32; 2], [DVec3; 2], DVec2, DVec2)> = edges
-            .iter()
-            .map(|e| {
-                let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
-                b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
-                (e.0, normals(e), a, b)
-            })
-            .collect();
         let face_index = ByRadius::new(rho_range.iter().copied());
         let edge_index = ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y))));
-        let tips = tip_points(surface, map, &corners, radius_mm);
         Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm }
     }
 
-    /// The points of the band between rings `lo` < `hi` where its scallop may peak: lines
-    /// |w| = const across every face, splitting the band into 4 strips or more where it is wide
-    /// on the surface (near a slit tip the map squeezes a wide region into a thin band), each at
-    /// most [`STRIP`]·R wide; points along every edge within the band; and the band's points
-    /// round the ends of holes.
-    pub(super) fn points(&self, lo: f64, hi: f64) -> Vec<GatePoint> {
-        let s = self.surface;
-        let mut out = Vec::new();
-        // Points spaced at most `step` (at least `min`) along the segment between two ends
-        // (position, normal, (arg w, |w|)), the middles of equal pieces.
-        let mut line = |a: End, b: End, step: f64, min: f64| {
-            let m = ((b.0 - a.0).length() / step).ceil().max(min) as usize;
-            for i in 0..m {
-                let u = (i as f64 + 0.5) / m as f64;
-                let w = a.2.lerp(b.2, u);
-                out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
-            }
+    /// The points of the band between rings `lo` < `hi` where its scallop may peak, that
+    /// `cutter` leaves uncut: lines |w| = const across every face, splitting the band into 4
+    /// strips or more where it is wide on the surface (near a slit tip the map squeezes a wide
+    /// region into a thin band), each at most [`STRIP`]·R wide; points along every edge within
+    /// the band; and the band's points round the ends of holes. Made and tested in chunks on the
+    /// pool (a band has thousands), kept in order: the same points on any number of threads.
+    pub(super) fn uncut(&self, lo: f64, hi: f64, cutter: &Cutter<'_>) -> Vec<GatePoint> {
+        let chunked = |items: Vec<usize>, f: &(dyn Fn(usize, &mut Vec<GatePoint>) + Sync)| {
+            let chunks = items.len().div_ceil(CHUNK);
+            crate::par::each(chunks, |c| {
+                let mut out = Vec::new();
+                for &i in &items[c * CHUNK..((c + 1) * CHUNK).min(items.len())] {
+                    f(i, &mut out);
+                }
+                out.retain(|p| !cutter.cuts(p));
+                out
+            })
         };
-        let end = |[vi, vj]: [usize; 2], [ni, nj]: [DVec3; 2], wi: DVec2, wj: DVec2, u: f64| -> End {
-            (s.positions[vi].lerp(s.positions[vj], u), ni.lerp(nj, u), wi.lerp(wj, u))
-        };
-        for f in self.face_index.near(lo, hi) {
-            let t = &s.triangles[f];
-            let (r0, r1) = self.rho_range[f];
-            if !(r1 > lo && r0 < hi) {
-                continue;
-            }
-            let width = (hi - lo) / self.rho_gradient[f];
-            let strips = (width / (STRIP * self.radius_mm)).clamp(4.0, 64.0).log2().ceil().exp2() as usize;
-            let c = self.corners[f];
-            for k in 1..strips {
-                let level = hi - (hi - lo) * k as f64 / strips as f64;
-                if !(level > r0 && level < r1) {
-                    continue;
-                }
-                let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
-                let mut found = 0;
-                for e in 0..3 {
-                    let (i, j) = (e, (e + 1) % 3);
-                    if found < 2 && ((c[i].y < level) != (c[j].y < level)) {
-                        let u = (level - c[i].y) / (c[j].y - c[i].y);
-                        let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
-                        ends[found] = end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
-                        found += 1;
-                    }
-                }
-                if found == 2 {
-                    line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0);
-                }
-            }
-        }
-        for e in self.edge_index.near(lo, hi) {
+        let faces = chunked(self.face_index.near(lo, hi).collect(), &|f, out| self.face_lines(f, lo, hi, out));
+        let edges = chunked(self.edge_index.near(lo, hi).collect(), &|e, out| {
             let ([a, b], normals, wa, wb) = self.edges[e];
             // The part of the edge inside the band.
             let (u0, u1) = clip(wa.y, wb.y, lo, hi);
             if u1 > u0 {
                 let ab = [a as usize, b as usize];
-                line(end(ab, normals, wa, wb, u0), end(ab, normals, wa, wb, u1), EDGE_STEP * self.radius_mm, EDGE_MIN);
+                let (p, q) = (self.end(ab, normals, wa, wb, u0), self.end(ab, normals, wa, wb, u1));
+                line(p, q, EDGE_STEP * self.radius_mm, EDGE_MIN, out);
+            }
+        });
+        let first = self.tips.partition_point(|p| p.2 <= lo);
+        let tips = &self.tips[first..];
+        let tips = cutter.uncut(&tips[..tips.partition_point(|p| p.2 < hi)]);
+        faces.into_iter().chain(edges).flatten().chain(tips).collect()
+    }
+
+    /// The lines |w| = const of the band (`lo`, `hi`) across face `f`.
+    fn face_lines(&self, f: usize, lo: f64, hi: f64, out: &mut Vec<GatePoint>) {
+        let s = self.surface;
+        let t = &s.triangles[f];
+        let (r0, r1) = self.rho_range[f];
+        if !(r1 > lo && r0 < hi) {
+            return;
+        }
+        let width = (hi - lo) / self.rho_gradient[f];
+        let strips = (width / (STRIP * self.radius_mm)).clamp(4.0, 64.0).log2().ceil().exp2() as usize;
+        let c = self.corners[f];
+        for k in 1..strips {
+            let level = hi - (hi - lo) * k as f64 / strips as f64;
+            if !(level > r0 && level < r1) {
+                continue;
+            }
+            let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
+            let mut found = 0;
+            for e in 0..3 {
+                let (i, j) = (e, (e + 1) % 3);
+                if found < 2 && ((c[i].y < level) != (c[j].y < level)) {
+                    let u = (level - c[i].y) / (c[j].y - c[i].y);
+                    let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
+                    ends[found] = self.end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
+                    found += 1;
+                }
+            }
+            if found == 2 {
+                line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0, out);
             }
         }
-        let first = self.tips.partition_point(|p| p.2 <= lo);
-        out.extend(self.tips[first..].iter().take_while(|p| p.2 < hi));
-        out
     }
+
+    /// The point at `u` along the edge from vertex `vi` to `vj`.
+    fn end(&self, [vi, vj]: [usize; 2], [ni, nj]: [DVec3; 2], wi: DVec2, wj: DVec2, u: f64) -> End {
+        let s = self.surface;
+        (s.positions[vi].lerp(s.positions[vj], u), ni.lerp(nj, u), wi.lerp(wj, u))
+    }
+}
+
+/// Faces or edges handed to one job of [`Gate::points`].
+const CHUNK: usize = 256;
+
+/// Points spaced at most `step` (at least `min`) along the segment between two ends, the middles
+/// of equal pieces.
+fn line(a: End, b: End, step: f64, min: f64, out: &mut Vec<GatePoint>) {
+    let m = ((b.0 - a.0).length() / step).ceil().max(min) as usize;
+    for i in 0..m {
+        let u = (i as f64 + 0.5) / m as f64;
+        let w = a.2.lerp(b.2, u);
+        out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
+    }
+}
+
+/// Every edge of the surface with its corner normals and log-polar ends (see [`Gate::edges`]).
+fn edges(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
+    // (vertices, face, their corners in it), lower vertex first.
+    let mut edges: Vec<([u32; 2], usize, [usize; 2])> = surface
+        .triangles
+        .iter()
+        .enumerate()
+        .flat_map(|(f, t)| {
+            (0..3).map(move |k| {
+                let ij = if t[k] < t[(k + 1) % 3] { [k, (k + 1) % 3] } else { [(k + 1) % 3, k] };
+                (ij.map(|i| t[i]), f, ij)
+            })
+        })
+        .collect();
+    edges.sort_unstable();
+    let normals = |&(_, f, ij): &([u32; 2], usize, [usize; 2])| ij.map(|i| surface.corner_normal(f, i));
+    edges.dedup_by(|b, a| a.0 == b.0 && normals(a) == normals(b));
+    let strip = |v: u32| {
+        let w = map.w[v as usize];
+        DVec2::new(crate::num::atan2(w.y, w.x), w.length())
+    };
+    edges
+        .iter()
+        .map(|e| {
+            let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
+            b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
+            (e.0, normals(e), a, b)
+        })
+        .collect()
 }
 
 /// Points of the surface round each end of each hole (the boundary vertices at its slit's
@@ -225,28 +256,30 @@ fn tip_points(surface: &Surface, map: &SlitMap, corners: &[[DVec2; 3]], radius_m
     }
     let tree = crate::mesh::nearest::FaceTree::new(&surface.positions, &surface.triangles);
     let reach = 0.5 * radius_mm;
-    let mut out = Vec::new();
-    for v in tips {
-        let (p0, n0) = (surface.positions[v as usize], surface.vertex_normals[v as usize]);
+    // One job per tip and grid ring, on the pool; in order, so the same points on any threads.
+    let per_tip = crate::par::each(tips.len() * TIP_RINGS, |job| {
+        let (v, i) = (tips[job / TIP_RINGS] as usize, job % TIP_RINGS + 1);
+        let (p0, n0) = (surface.positions[v], surface.vertex_normals[v]);
         let e1 = n0.any_orthonormal_vector();
         let e2 = n0.cross(e1);
-        for i in 1..=TIP_RINGS {
-            let r = reach * i as f64 / TIP_RINGS as f64;
-            for j in 0..TIP_SPOKES {
-                let (sin, cos) = crate::num::sin_cos(TAU * j as f64 / TIP_SPOKES as f64);
-                let p = p0 + r * (cos * e1 + sin * e2);
-                // Off the part (in the hole, past a steep wall): nothing to test.
-                let Some(hit) = tree.nearest(p, 0.1 * r) else { continue };
-                let mut normal = DVec3::ZERO;
-                let mut w = DVec2::ZERO;
-                for (k, (&b, &c)) in hit.bary.iter().zip(&corners[hit.face]).enumerate() {
-                    normal += b * surface.corner_normal(hit.face, k);
-                    w += b * c;
-                }
-                out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
+        let r = reach * i as f64 / TIP_RINGS as f64;
+        let mut out = Vec::with_capacity(TIP_SPOKES);
+        for j in 0..TIP_SPOKES {
+            let (sin, cos) = crate::num::sin_cos(TAU * j as f64 / TIP_SPOKES as f64);
+            let p = p0 + r * (cos * e1 + sin * e2);
+            // Off the part (in the hole, past a steep wall): nothing to test.
+            let Some(hit) = tree.nearest(p, 0.1 * r) else { continue };
+            let mut normal = DVec3::ZERO;
+            let mut w = DVec2::ZERO;
+            for (k, (&b, &c)) in hit.bary.iter().zip(&corners[hit.face]).enumerate() {
+                normal += b * surface.corner_normal(hit.face, k);
+                w += b * c;
             }
+            out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
         }
-    }
+        out
+    });
+    let mut out: Vec<GatePoint> = per_tip.into_iter().flatten().collect();
     out.sort_by(|a, b| a.2.total_cmp(&b.2));
     out
 }
@@ -310,24 +343,40 @@ impl RingLine {
 /// Segments searched on each side of a point's angle before the grid is asked.
 const LOCAL_SEGMENTS: isize = 8;
 
-/// The points of `points` whose S^h point (height `h_mm`) no ball of radius `radius_mm` on the
-/// rings reaches.
-pub(super) fn uncut(rings: &[&RingLine], points: &[GatePoint], radius_mm: f64, h_mm: f64) -> Vec<GatePoint> {
-    let grid = std::sync::OnceLock::new();
-    let cut = crate::par::each(points.len(), |i| {
-        let &(p, n, rho, theta) = &points[i];
-        let q = p + n * h_mm;
+/// Whether points of S^h (height `h_mm` over the surface) lie within `radius_mm` of a ball centre
+/// on the rings' polylines.
+pub(super) struct Cutter<'r> {
+    rings: &'r [&'r RingLine],
+    radius_mm: f64,
+    h_mm: f64,
+    /// Built by the first point the local search does not settle.
+    grid: std::sync::OnceLock<SegmentGrid>,
+}
+
+impl<'r> Cutter<'r> {
+    pub(super) fn new(rings: &'r [&'r RingLine], radius_mm: f64, h_mm: f64) -> Self {
+        Self { rings, radius_mm, h_mm, grid: std::sync::OnceLock::new() }
+    }
+
+    fn cuts(&self, &(p, n, rho, theta): &GatePoint) -> bool {
+        let q = p + n * self.h_mm;
         // The ring nearer in |w| first.
-        let order = match rings {
+        let order = match self.rings {
             [a, b] if (b.rho - rho).abs() < (a.rho - rho).abs() => [Some(*b), Some(*a)],
             [a, b] => [Some(*a), Some(*b)],
             [a] => [Some(*a), None],
             _ => [None, None],
         };
-        order.into_iter().flatten().any(|ring| ring.near_theta_within(q, theta, radius_mm))
-            || grid.get_or_init(|| SegmentGrid::new(rings, radius_mm)).any_within(q, radius_mm)
-    });
-    points.iter().zip(cut).filter(|(_, c)| !c).map(|(p, _)| *p).collect()
+        let r = self.radius_mm;
+        order.into_iter().flatten().any(|ring| ring.near_theta_within(q, theta, r))
+            || self.grid.get_or_init(|| SegmentGrid::new(self.rings, r)).any_within(q, r)
+    }
+
+    /// The points of `points` no ball reaches.
+    pub(super) fn uncut(&self, points: &[GatePoint]) -> Vec<GatePoint> {
+        let cut = crate::par::each(points.len(), |i| self.cuts(&points[i]));
+        points.iter().zip(cut).filter(|(_, c)| !c).map(|(p, _)| *p).collect()
+    }
 }
 
 /// Segments of polylines binned in a uniform grid (cells of the ball radius), for "is any
@@ -426,7 +475,7 @@ mod tests {
         }
         // Between the rings every cover is on the point's own meridian.
         assert!(cut > 1000 && local == cut, "cut {cut}, found locally {local}");
-        // `uncut` answers the same as brute force.
+        // The cutter answers the same as brute force.
         let points: Vec<GatePoint> = (0..2000)
             .map(|_| {
                 let (t, s) = (TAU * rng.unit(), 8.5 + 2.0 * rng.unit());
@@ -434,7 +483,7 @@ mod tests {
             })
             .collect();
         let h = 0.05;
-        let bad = uncut(&refs, &points, r, h);
+        let bad = Cutter::new(&refs, r, h).uncut(&points);
         let expected: Vec<GatePoint> =
             points.iter().filter(|p| !brute_force(&refs, p.0 + p.1 * h, r)).copied().collect();
         assert_eq!(bad, expected);

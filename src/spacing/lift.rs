@@ -41,6 +41,7 @@ impl Lifted {
 #[derive(Debug, Clone)]
 pub struct Lift<'a> {
     surface: &'a Surface,
+    map: &'a SlitMap,
     /// Disk maps: the faces around the pole, lifted through the w plane (see [`PoleStar`]).
     star: Option<PoleStar>,
     /// Log-polar image triangles (see module docs), indexed for point location.
@@ -53,7 +54,9 @@ pub struct Lift<'a> {
 }
 
 impl<'a> Lift<'a> {
-    pub fn new(surface: &'a Surface, map: &SlitMap) -> Self {
+    /// Precondition: `map` is a slit map of `surface` (the same vertices; the spacing and
+    /// spiral entry points check it).
+    pub fn new(surface: &'a Surface, map: &'a SlitMap) -> Self {
         let mut corners = map.log_polar_corners();
         let (vertex_start, vertex_faces) = vertex_faces(map.w.len(), map.triangles());
         let star = map.pole_face.map(|f| PoleStar::new(map, f, &corners, &vertex_start, &vertex_faces));
@@ -62,7 +65,17 @@ impl<'a> Lift<'a> {
         for &(f, _) in star.iter().flat_map(|s| &s.faces) {
             corners[f] = [DVec2::NAN; 3];
         }
-        Self { surface, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
+        Self { surface, map, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
+    }
+
+    /// The surface points are lifted to.
+    pub fn surface(&self) -> &'a Surface {
+        self.surface
+    }
+
+    /// The slit map it inverts.
+    pub fn map(&self) -> &'a SlitMap {
+        self.map
     }
 
     /// The surface point whose image is `w`.

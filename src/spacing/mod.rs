@@ -196,10 +196,23 @@ struct Chain {
 /// One-off entry: the ring radii for `map` on `surface`.
 pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Result<Rings, SpacingError> {
     check_options(options)?;
+    check_map(surface, map)?;
+    spacing_on(&Lift::new(surface, map), options)
+}
+
+/// The ring radii for the map `lift` inverts, on its surface (the lift built once per map is
+/// shared with [`crate::spiral::spiral_on`]).
+pub fn spacing_on(lift: &Lift<'_>, options: &SpacingOptions) -> Result<Rings, SpacingError> {
+    check_options(options)?;
+    Spacer::new(lift, options).run()
+}
+
+/// The map must be one of the surface (same vertices) before a [`Lift`] is built on them.
+fn check_map(surface: &Surface, map: &SlitMap) -> Result<(), SpacingError> {
     if map.w.len() != surface.positions.len() {
         return Err(SpacingError::MeshMismatch { map: map.w.len(), surface: surface.positions.len() });
     }
-    Spacer::new(surface, map, options).run()
+    Ok(())
 }
 
 fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
@@ -231,7 +244,7 @@ fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
 }
 
 struct Spacer<'a> {
-    lift: Lift<'a>,
+    lift: &'a Lift<'a>,
     gate: gate::Gate<'a>,
     gate_compromises: usize,
     slits: Vec<SlitBand>,
@@ -341,7 +354,8 @@ struct Band {
 }
 
 impl<'a> Spacer<'a> {
-    fn new(surface: &'a Surface, map: &SlitMap, options: &SpacingOptions) -> Self {
+    fn new(lift: &'a Lift<'a>, options: &SpacingOptions) -> Self {
+        let (surface, map) = (lift.surface(), lift.map());
         // In the log-polar strip the two sides of a slit are exactly on its line (see `lift`):
         // only radii within rounding of the slit radius are ambiguous.
         let slits = map
@@ -376,12 +390,17 @@ impl<'a> Spacer<'a> {
                 _ => merged.push((lo, hi)),
             }
         }
+        // Independent indexes of the same map, built side by side.
+        let ((corners, creases), gate) = crate::par::join(
+            || (corner_angles(surface, map), creases(surface, map)),
+            || gate::Gate::new(surface, map, options.radius_mm),
+        );
         Self {
-            lift: Lift::new(surface, map),
-            gate: gate::Gate::new(surface, map, options.radius_mm),
+            lift,
+            gate,
             gate_compromises: 0,
-            corners: corner_angles(surface, map),
-            creases: creases(surface, map),
+            corners,
+            creases,
             forbidden: merged,
             slits,
             mode: map.mode,
@@ -530,8 +549,7 @@ impl<'a> Spacer<'a> {
         let mut lo = lo;
         let mut lower = self.centres(lo, None)?;
         for _ in 0..GATE_ROUNDS {
-            let points = self.gate.points(lo, hi);
-            let bad = gate::uncut(&rings(upper, &lower), &points, r, h);
+            let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&rings(upper, &lower), r, h));
             if bad.is_empty() {
                 return Ok((lo, lower));
             }
@@ -542,7 +560,7 @@ impl<'a> Spacer<'a> {
                 let mid = 0.5 * (ok + no);
                 let centres = self.centres(mid, Some(&focus))?;
                 // With a margin: the band's next points lie beside these.
-                if gate::uncut(&rings(upper, &centres), &bad, r, GATE_BISECTION_MARGIN * h).is_empty() {
+                if gate::Cutter::new(&rings(upper, &centres), r, GATE_BISECTION_MARGIN * h).uncut(&bad).is_empty() {
                     ok = mid;
                 } else {
                     no = mid;

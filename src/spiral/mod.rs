@@ -101,6 +101,8 @@ impl Default for SpiralOptions {
 pub enum SpiralError {
     #[error("invalid spiral option: {0}")]
     InvalidOption(String),
+    #[error("the slit map has {map} vertices but the surface {surface}: they must come from the same mesh")]
+    MeshMismatch { map: usize, surface: usize },
     #[error("there are no rings to bridge")]
     NoRings,
     #[error("the slit-domain point at radius {rho}, angle {theta} does not lie on the surface")]
@@ -246,6 +248,17 @@ impl SlitU {
 /// One-off entry: the spiral through `rings` on `surface` (with the slit map the rings came from).
 pub fn spiral(surface: &Surface, map: &SlitMap, rings: &Rings, options: &SpiralOptions) -> Result<Spiral, SpiralError> {
     check_options(options)?;
+    if map.w.len() != surface.positions.len() {
+        return Err(SpiralError::MeshMismatch { map: map.w.len(), surface: surface.positions.len() });
+    }
+    spiral_on(&Lift::new(surface, map), rings, options)
+}
+
+/// The spiral through `rings` on the map `lift` inverts (the lift built once per map is shared
+/// with [`crate::spacing::spacing_on`]).
+pub fn spiral_on(lift: &Lift<'_>, rings: &Rings, options: &SpiralOptions) -> Result<Spiral, SpiralError> {
+    check_options(options)?;
+    let map = lift.map();
     if rings.rings.is_empty() {
         return Err(SpiralError::NoRings);
     }
@@ -271,8 +284,7 @@ pub fn spiral(surface: &Surface, map: &SlitMap, rings: &Rings, options: &SpiralO
     }
     let (extra, pieces, bridges) = best.expect("at least one trial");
 
-    let lift = Lift::new(surface, map);
-    let mut points = sample(&lift, &pieces, sense, options)?;
+    let mut points = sample(lift, &pieces, sense, options)?;
     if options.direction == Direction::Outward {
         points.reverse();
     }
@@ -423,10 +435,17 @@ fn march(
         let mut step = du.min(u1 - u);
         let min_step = 1e-9 * (u1 - u0).max(1.0);
         let mut halvings = 0;
+        // A halved step ends at the last midpoint: that point is not lifted twice.
+        let mut last_mid: Option<(f64, PathPoint)> = None;
         let (next_u, next) = loop {
             let ub = u + step;
-            let pb = eval(lift, piece, ub, sense, Some(here.face))?;
-            let pm = eval(lift, piece, u + 0.5 * step, sense, Some(here.face))?;
+            let pb = match last_mid {
+                Some((um, pm)) if um == ub => pm,
+                _ => eval(lift, piece, ub, sense, Some(here.face))?,
+            };
+            let um = u + 0.5 * step;
+            let pm = eval(lift, piece, um, sense, Some(here.face))?;
+            last_mid = Some((um, pm));
             let chord = (pb.cc - here.cc).length();
             let centre = |p: &PathPoint| p.cc + radius * p.normal;
             let (ca, cb) = (centre(&here), centre(&pb));
