@@ -268,7 +268,14 @@ struct Spacer<'a> {
     crease_compromises: usize,
     /// arg w of the meridians that decided the last ring (see [`Spacer::next_radius`]).
     binding: Vec<f64>,
+    /// arg w of the last meridian a full check found uncut: the next band's checks start there,
+    /// as the meridians that fail (round slit tips, on long rings) fail ring after ring.
+    fail_theta: f64,
 }
+
+/// Meridians after one a full check found uncut that are tested with it (see
+/// [`Spacer::next_radius`]).
+const CLUSTER: usize = 32;
 
 /// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
 const GATE_FRACTION: f64 = 0.95;
@@ -414,6 +421,7 @@ impl<'a> Spacer<'a> {
             fold_compromises: 0,
             crease_compromises: 0,
             binding: Vec::new(),
+            fail_theta: 0.0,
         }
     }
 
@@ -474,7 +482,7 @@ impl<'a> Spacer<'a> {
     /// Smallest admissible radius below `band.hi`. Bisecting over every meridian would test all
     /// of them at every passing trial, although one or two decide the ring: the bisection runs
     /// over an active set of meridians (those that decided the ring above, then every meridian a
-    /// full check finds failing), and only its result is checked on every meridian.
+    /// full check finds failing, with those failing among the [`CLUSTER`] after it), and only its result is checked on every meridian.
     fn next_radius(&mut self, band: &mut Band, last_step: Option<f64>) -> Result<f64, SpacingError> {
         let hi = band.hi;
         let step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
@@ -503,6 +511,15 @@ impl<'a> Spacer<'a> {
                 Some(i) => {
                     bad = ok_a;
                     band.active.push(i);
+                    // The meridians after it often fail too (the dense ones round a slit tip, a
+                    // stretch of a long ring): tested at once, they join the bisection together
+                    // instead of costing a bisection and a full check each.
+                    let n = band.thetas.len();
+                    let next: Vec<usize> =
+                        (1..=CLUSTER.min(n - 1)).map(|d| (i + d) % n).filter(|k| !band.active.contains(k)).collect();
+                    let (this, tested) = (&*self, &*band);
+                    let fails = crate::par::try_map(next.len(), |j| Ok(!this.meridian_ok(tested, next[j], ok_a)?))?;
+                    band.active.extend(next.iter().zip(fails).filter(|(_, fail)| *fail).map(|(k, _)| *k));
                 }
             }
         };
@@ -755,7 +772,8 @@ impl<'a> Spacer<'a> {
         }
         active.sort_unstable();
         active.dedup();
-        Ok((Band { hi, thetas, pointwise, creased, upper, last_fail: 0, active }, length))
+        let last_fail = thetas.partition_point(|&x| x < self.fail_theta) % thetas.len();
+        Ok((Band { hi, thetas, pointwise, creased, upper, last_fail, active }, length))
     }
 
     /// 3D length of the ring at `rho` from 2048 uniform angles, with the cumulative lengths.
@@ -823,6 +841,7 @@ impl<'a> Spacer<'a> {
         let failed = crate::par::find_first(n, |k| Ok::<_, SpacingError>(!this.meridian_ok(tested, at(k), rho)?))?;
         if let Some(k) = failed {
             band.last_fail = at(k);
+            self.fail_theta = band.thetas[band.last_fail];
         }
         Ok(failed.map(at))
     }
