@@ -277,6 +277,9 @@ struct Spacer<'a> {
 /// [`Spacer::next_radius`]).
 const CLUSTER: usize = 32;
 
+/// Active sets this large are tested on the pool (smaller ones cost less than the hand-over).
+const PARALLEL_ACTIVE: usize = 8;
+
 /// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
 const GATE_FRACTION: f64 = 0.95;
 /// Rounds of moving a ring up before the gate gives in (reported).
@@ -853,6 +856,12 @@ impl<'a> Spacer<'a> {
         let hi = band.hi;
         let passes = |this: &mut Self, rho: f64| -> Result<bool, SpacingError> {
             this.trials += 1;
+            if band.active.len() >= PARALLEL_ACTIVE {
+                let this = &*this;
+                let failed =
+                    crate::par::find_first(band.active.len(), |k| Ok(!this.meridian_ok(band, band.active[k], rho)?))?;
+                return Ok(failed.is_none());
+            }
             for &i in &band.active {
                 if !this.meridian_ok(band, i, rho)? {
                     return Ok(false);
