@@ -189,7 +189,7 @@ impl<'a> Gate<'a> {
     }
 }
 
-/// Faces or edges handed to one job of [`Gate::points`].
+/// Faces or edges handed to one job of [`Gate::uncut`].
 const CHUNK: usize = 256;
 
 /// Points spaced at most `step` (at least `min`) along the segment between two ends, the middles
@@ -203,7 +203,8 @@ fn line(a: End, b: End, step: f64, min: f64, out: &mut Vec<GatePoint>) {
     }
 }
 
-/// Every edge of the surface with its corner normals and log-polar ends (see [`Gate::edges`]).
+/// Every edge of the surface with its corner normals and log-polar ends, once per side of an edge
+/// where the normals split (the gate's `edges`).
 fn edges(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
     // (vertices, face, their corners in it), lower vertex first.
     let mut edges: Vec<([u32; 2], usize, [usize; 2])> = surface

@@ -485,7 +485,8 @@ impl<'a> Spacer<'a> {
     /// Smallest admissible radius below `band.hi`. Bisecting over every meridian would test all
     /// of them at every passing trial, although one or two decide the ring: the bisection runs
     /// over an active set of meridians (those that decided the ring above, then every meridian a
-    /// full check finds failing, with those failing among the [`CLUSTER`] after it), and only its result is checked on every meridian.
+    /// full check finds failing, with those failing among the [`CLUSTER`] after it), and only
+    /// its result is checked on every meridian.
     fn next_radius(&mut self, band: &mut Band, last_step: Option<f64>) -> Result<f64, SpacingError> {
         let hi = band.hi;
         let step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
