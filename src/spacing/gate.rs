@@ -89,7 +89,8 @@ impl<'a> Gate<'a> {
     pub(super) fn new(surface: &'a Surface, map: &SlitMap, radius_mm: f64) -> Self {
         let corners = map.log_polar_corners();
         // The hole-end points (a nearest-face search) beside the edges.
-        let (tips, edges) = crate::par::join(|| tip_points(surface, map, &corners, radius_mm), || edges(surface, map));
+        let (tips, edges) =
+            crate::par::join(|| tip_points(surface, map, &corners, radius_mm), || edges_of(surface, map));
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = surface
@@ -205,7 +206,7 @@ fn line(a: End, b: End, step: f64, min: f64, out: &mut Vec<GatePoint>) {
 
 /// Every edge of the surface with its corner normals and log-polar ends, once per side of an edge
 /// where the normals split (the gate's `edges`).
-fn edges(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
+fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
     // (vertices, face, their corners in it), lower vertex first.
     let mut edges: Vec<([u32; 2], usize, [usize; 2])> = surface
         .triangles

@@ -54,8 +54,7 @@ pub struct Lift<'a> {
 }
 
 impl<'a> Lift<'a> {
-    /// Precondition: `map` is a slit map of `surface` (the same vertices; the spacing and
-    /// spiral entry points check it).
+    /// Precondition: `map` is a slit map of `surface` (see [`Lift::mismatch`]).
     pub fn new(surface: &'a Surface, map: &'a SlitMap) -> Self {
         let mut corners = map.log_polar_corners();
         let (vertex_start, vertex_faces) = vertex_faces(map.w.len(), map.triangles());
@@ -66,6 +65,12 @@ impl<'a> Lift<'a> {
             corners[f] = [DVec2::NAN; 3];
         }
         Self { surface, map, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
+    }
+
+    /// (map vertices, surface vertices) when `map` is not a slit map of `surface` (they differ
+    /// in number): [`Lift::new`] would index out of bounds.
+    pub fn mismatch(surface: &Surface, map: &SlitMap) -> Option<(usize, usize)> {
+        (map.w.len() != surface.positions.len()).then_some((map.w.len(), surface.positions.len()))
     }
 
     /// The surface points are lifted to.

@@ -196,8 +196,10 @@ struct Chain {
 /// One-off entry: the ring radii for `map` on `surface`.
 pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Result<Rings, SpacingError> {
     check_options(options)?;
-    check_map(surface, map)?;
-    spacing_on(&Lift::new(surface, map), options)
+    if let Some((map_vertices, surface_vertices)) = Lift::mismatch(surface, map) {
+        return Err(SpacingError::MeshMismatch { map: map_vertices, surface: surface_vertices });
+    }
+    Spacer::new(&Lift::new(surface, map), options).run()
 }
 
 /// The ring radii for the map `lift` inverts, on its surface (the lift built once per map is
@@ -205,14 +207,6 @@ pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Re
 pub fn spacing_on(lift: &Lift<'_>, options: &SpacingOptions) -> Result<Rings, SpacingError> {
     check_options(options)?;
     Spacer::new(lift, options).run()
-}
-
-/// The map must be one of the surface (same vertices) before a [`Lift`] is built on them.
-fn check_map(surface: &Surface, map: &SlitMap) -> Result<(), SpacingError> {
-    if map.w.len() != surface.positions.len() {
-        return Err(SpacingError::MeshMismatch { map: map.w.len(), surface: surface.positions.len() });
-    }
-    Ok(())
 }
 
 fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
@@ -276,9 +270,6 @@ struct Spacer<'a> {
 /// Meridians after one a full check found uncut that are tested with it (see
 /// [`Spacer::next_radius`]).
 const CLUSTER: usize = 32;
-
-/// Active sets this large are tested on the pool (smaller ones cost less than the hand-over).
-const PARALLEL_ACTIVE: usize = 8;
 
 /// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
 const GATE_FRACTION: f64 = 0.95;
@@ -857,18 +848,10 @@ impl<'a> Spacer<'a> {
         let hi = band.hi;
         let passes = |this: &mut Self, rho: f64| -> Result<bool, SpacingError> {
             this.trials += 1;
-            if band.active.len() >= PARALLEL_ACTIVE {
-                let this = &*this;
-                let failed =
-                    crate::par::find_first(band.active.len(), |k| Ok(!this.meridian_ok(band, band.active[k], rho)?))?;
-                return Ok(failed.is_none());
-            }
-            for &i in &band.active {
-                if !this.meridian_ok(band, i, rho)? {
-                    return Ok(false);
-                }
-            }
-            Ok(true)
+            let this = &*this;
+            let failed =
+                crate::par::find_first(band.active.len(), |k| Ok(!this.meridian_ok(band, band.active[k], rho)?))?;
+            Ok(failed.is_none())
         };
         let (mut ok, mut bad) = (hi, bad);
         let mut step = step;

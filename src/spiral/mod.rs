@@ -248,16 +248,21 @@ impl SlitU {
 /// One-off entry: the spiral through `rings` on `surface` (with the slit map the rings came from).
 pub fn spiral(surface: &Surface, map: &SlitMap, rings: &Rings, options: &SpiralOptions) -> Result<Spiral, SpiralError> {
     check_options(options)?;
-    if map.w.len() != surface.positions.len() {
-        return Err(SpiralError::MeshMismatch { map: map.w.len(), surface: surface.positions.len() });
+    if let Some((map_vertices, surface_vertices)) = Lift::mismatch(surface, map) {
+        return Err(SpiralError::MeshMismatch { map: map_vertices, surface: surface_vertices });
     }
-    spiral_on(&Lift::new(surface, map), rings, options)
+    bridge_and_sample(&Lift::new(surface, map), rings, options)
 }
 
 /// The spiral through `rings` on the map `lift` inverts (the lift built once per map is shared
 /// with [`crate::spacing::spacing_on`]).
 pub fn spiral_on(lift: &Lift<'_>, rings: &Rings, options: &SpiralOptions) -> Result<Spiral, SpiralError> {
     check_options(options)?;
+    bridge_and_sample(lift, rings, options)
+}
+
+/// The spiral, for checked options.
+fn bridge_and_sample(lift: &Lift<'_>, rings: &Rings, options: &SpiralOptions) -> Result<Spiral, SpiralError> {
     let map = lift.map();
     if rings.rings.is_empty() {
         return Err(SpiralError::NoRings);
