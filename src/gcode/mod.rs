@@ -261,16 +261,28 @@ impl Fmt {
         // Integer digits: formatting floats exactly was a tenth of a 40k-face plan.
         let x = v * 10f64.powi(decimals as i32);
         if decimals <= 9 && x.abs() < 9.0e15 {
-            use std::fmt::Write;
+            // The digits by hand, last first (the formatting machinery was most of the post).
             let n = x.round() as i64;
-            let (p, a) = (10u64.pow(decimals as u32), n.unsigned_abs());
-            let sign = if n < 0 { "-" } else { "" };
-            let mut s = String::with_capacity(24);
-            let _ = match decimals {
-                0 => write!(s, "{sign}{a}"),
-                d => write!(s, "{sign}{}.{:0d$}", a / p, a % p),
-            };
-            return s;
+            let mut a = n.unsigned_abs();
+            let mut buf = [0u8; 32];
+            let mut i = buf.len();
+            for k in 0.. {
+                if k == decimals && k > 0 {
+                    i -= 1;
+                    buf[i] = b'.';
+                }
+                i -= 1;
+                buf[i] = b'0' + (a % 10) as u8;
+                a /= 10;
+                if a == 0 && k >= decimals {
+                    break;
+                }
+            }
+            if n < 0 {
+                i -= 1;
+                buf[i] = b'-';
+            }
+            return buf[i..].iter().map(|&b| b as char).collect();
         }
         let s = format!("{v:.decimals$}");
         match s.strip_prefix('-') {
