@@ -7,6 +7,10 @@ use slitpath::bench::{plan_cases, run_plan, run_plan_scaled, PLAN_HEADER};
 use slitpath::mesh::stl;
 use std::time::Instant;
 
+// The CLI's allocator (see src/bin/slitpath/main.rs), so the figures are the CLI's.
+#[global_allocator]
+static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     let start = Instant::now();
     let now = || start.elapsed().as_secs_f64() * 1e3;

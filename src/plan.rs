@@ -23,7 +23,6 @@ use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOp
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
-use std::sync::OnceLock;
 
 /// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the
 /// CLI's and the page's.
@@ -149,12 +148,11 @@ pub struct Planner {
     pub solver: SlitMapSolver,
     /// Timings of the per-part work (`read` is the caller's, when it measured it).
     pub prepare_ms: Timings,
-    /// The facet tree for [`Facets::Exact`], built by the first plan that needs it (beside its
-    /// spiral, whose time then includes it) and reused by every later one.
-    faces: OnceLock<FaceTree>,
+    /// The facet tree the toolpath clears [`Facets::Exact`] contacts against.
+    faces: FaceTree,
     /// `surface` with its normals split at sharp creases, which the ball rides with
-    /// [`Facets::Exact`] (built by the first plan that needs it).
-    creased: OnceLock<Surface>,
+    /// [`Facets::Exact`].
+    creased: Surface,
 }
 
 /// Faces turning more than this are a sharp edge of the part, across which exact facets do not
@@ -218,23 +216,21 @@ impl Planner {
         // The rim refinement prepares the surface for the flattening: its time counts there.
         let t = now();
         let surface = planning_surface(&surface);
-        let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
-        let t_flatten = now() - t;
-        let domain = PlanarDomain::of_surface(&surface, flattening.uv.clone());
-        let t = now();
-        let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
-        let t_slit = now() - t;
-        let prepare_ms = Timings { flatten: t_flatten, slitmap: t_slit, ..Timings::default() };
-        Ok(Self {
-            report,
-            surface,
-            flattening,
-            domain,
-            solver,
-            prepare_ms,
-            faces: OnceLock::new(),
-            creased: OnceLock::new(),
-        })
+        // What exact facets need depends on the part alone: built beside the conformal stages,
+        // which leave a thread idle most of their time.
+        let ((creased, faces), prepared) = crate::par::beside(
+            || (surface.with_crease_normals(CREASE_SPLIT_DEG), FaceTree::new(&surface.positions, &surface.triangles)),
+            || -> Result<_, PlanError> {
+                let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
+                let t_flatten = now() - t;
+                let domain = PlanarDomain::of_surface(&surface, flattening.uv.clone());
+                let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
+                Ok((flattening, domain, solver, t_flatten))
+            },
+        );
+        let (flattening, domain, solver, t_flatten) = prepared?;
+        let prepare_ms = Timings { flatten: t_flatten, slitmap: now() - t - t_flatten, ..Timings::default() };
+        Ok(Self { report, surface, flattening, domain, solver, prepare_ms, faces, creased })
     }
 
     /// Plans with `options`; `progress(stage, done, total)` is called as each stage starts.
@@ -253,12 +249,7 @@ impl Planner {
         stage(0);
         let t = now();
         let origin_options = OriginOptions { radius_mm: r, choice: options.origin, ..OriginOptions::default() };
-        // The surface the later stages ride depends on the part alone: built beside the search.
-        let (_, origin) = crate::par::beside(
-            || self.riding(options.facets),
-            || origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options),
-        );
-        let mut origin = origin?;
+        let mut origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
         timings.origin = now() - t;
         let spiral_options = SpiralOptions {
             direction: options.direction,
@@ -316,7 +307,7 @@ impl Planner {
         let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
         let cleared = match options.facets {
             Facets::Exact => {
-                let faces = self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
+                let faces = &self.faces;
                 let tolerance = spiral_options.chord_tolerance_mm;
                 let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
                 Some(toolpath::clear_facets(faces, &designed, &designed_normals, &cc_faces, r, tolerance))
@@ -420,15 +411,7 @@ impl Planner {
         let rings = rings?;
         stage(2);
         let t = now();
-        // The facet tree the toolpath stage needs is built beside the spiral.
-        let ((), spiral) = crate::par::beside(
-            || {
-                if options.facets == Facets::Exact {
-                    self.faces.get_or_init(|| FaceTree::new(&self.surface.positions, &self.surface.triangles));
-                }
-            },
-            || spiral::spiral_on(&lift, &rings, spiral_options),
-        );
+        let spiral = spiral::spiral_on(&lift, &rings, spiral_options);
         timings.spiral += now() - t;
         Ok((map, rings, spiral?))
     }
@@ -436,7 +419,7 @@ impl Planner {
     /// The surface whose normals the ball rides for `facets`.
     fn riding(&self, facets: Facets) -> &Surface {
         match facets {
-            Facets::Exact => self.creased.get_or_init(|| self.surface.with_crease_normals(CREASE_SPLIT_DEG)),
+            Facets::Exact => &self.creased,
             Facets::Smooth => &self.surface,
         }
     }

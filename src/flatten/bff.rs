@@ -130,28 +130,32 @@ impl BffSolver {
 
         let interior_unknown: Vec<Option<usize>> =
             interior_index.iter().map(|&i| (i != NONE).then_some(i as usize)).collect();
-        // A mesh may have no interior vertex at all (a strip): nothing to solve then.
-        let aii = if interior.is_empty() {
-            None
-        } else {
-            let trip = cotan_laplacian_triplets(&weights, Some(&interior_unknown));
-            let sub = restrict_order(&order, &interior_unknown, interior.len());
-            Some(SparseCholesky::with_order(interior.len(), &trip, &sub)?)
-        };
-
-        // Always built: the conjugate, the disk target and prescribed angles all need it.
-        let neumann = {
-            let pinned = outer[0] as usize;
-            let unknown: Vec<Option<usize>> = (0..n_all)
-                .map(|v| match v.cmp(&pinned) {
-                    std::cmp::Ordering::Less => Some(v),
-                    std::cmp::Ordering::Equal => None,
-                    std::cmp::Ordering::Greater => Some(v - 1),
-                })
-                .collect();
-            let trip = cotan_laplacian_triplets(&weights, Some(&unknown));
-            SparseCholesky::with_order(n_all - 1, &trip, &restrict_order(&order, &unknown, n_all - 1))?
-        };
+        // The two factorisations are independent: side by side.
+        let (aii, neumann) = crate::par::join(
+            || {
+                // A mesh may have no interior vertex at all (a strip): nothing to solve then.
+                if interior.is_empty() {
+                    return Ok(None);
+                }
+                let trip = cotan_laplacian_triplets(&weights, Some(&interior_unknown));
+                let sub = restrict_order(&order, &interior_unknown, interior.len());
+                SparseCholesky::with_order(interior.len(), &trip, &sub).map(Some)
+            },
+            || {
+                // Always built: the conjugate, the disk target and prescribed angles all need it.
+                let pinned = outer[0] as usize;
+                let unknown: Vec<Option<usize>> = (0..n_all)
+                    .map(|v| match v.cmp(&pinned) {
+                        std::cmp::Ordering::Less => Some(v),
+                        std::cmp::Ordering::Equal => None,
+                        std::cmp::Ordering::Greater => Some(v - 1),
+                    })
+                    .collect();
+                let trip = cotan_laplacian_triplets(&weights, Some(&unknown));
+                SparseCholesky::with_order(n_all - 1, &trip, &restrict_order(&order, &unknown, n_all - 1))
+            },
+        );
+        let (aii, neumann) = (aii?, neumann?);
 
         let area3d = input.triangles.iter().map(|t| tri_area3(input.positions, *t)).sum();
         Ok(Self {

@@ -538,32 +538,32 @@ impl SlitMapSolver {
         // factorisation): each takes the order induced on its unknowns, a merged hole at the
         // place of its last vertex.
         let order = mesh_order(n, &fem_triangles)?;
-        let h_chol = if n_h == 0 {
-            // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the type
-            // stays simple; it is never used with a non-empty right-hand side.
-            SparseCholesky::new(1, &[(0, 0, 1.0)])?
-        } else {
-            let trip = cotan_laplacian_triplets(&weights, Some(&h_unknown));
-            SparseCholesky::with_order(n_h, &trip, &restrict_order(&order, &h_unknown, n_h))?
-        };
-
         // (b) θ_h: Neumann Laplacian with vertex 0 fixed (θ_h = 0 there; the rotation is fixed
         // afterwards).
         let fixed = 0;
-        let mut theta_unknown = vec![None; n];
-        let mut next = 0usize;
-        for (v, slot) in theta_unknown.iter_mut().enumerate() {
-            if v != fixed {
-                *slot = Some(next);
-                next += 1;
-            }
-        }
-        let theta_chol = if next == 0 {
-            SparseCholesky::new(1, &[(0, 0, 1.0)])?
-        } else {
-            let trip = cotan_laplacian_triplets(&weights, Some(&theta_unknown));
-            SparseCholesky::with_order(next, &trip, &restrict_order(&order, &theta_unknown, next))?
-        };
+        let theta_unknown: Vec<Option<usize>> =
+            (0..n).map(|v| (v != fixed).then(|| v - usize::from(v > fixed))).collect();
+        let n_theta = n - 1;
+        // The two factorisations are independent: side by side.
+        let (h_chol, theta_chol) = crate::par::join(
+            || {
+                if n_h == 0 {
+                    // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the
+                    // type stays simple; it is never used with a non-empty right-hand side.
+                    return SparseCholesky::new(1, &[(0, 0, 1.0)]);
+                }
+                let trip = cotan_laplacian_triplets(&weights, Some(&h_unknown));
+                SparseCholesky::with_order(n_h, &trip, &restrict_order(&order, &h_unknown, n_h))
+            },
+            || {
+                if n_theta == 0 {
+                    return SparseCholesky::new(1, &[(0, 0, 1.0)]);
+                }
+                let trip = cotan_laplacian_triplets(&weights, Some(&theta_unknown));
+                SparseCholesky::with_order(n_theta, &trip, &restrict_order(&order, &theta_unknown, n_theta))
+            },
+        );
+        let (h_chol, theta_chol) = (h_chol?, theta_chol?);
 
         let hole_pole = domain.loops[1..].iter().map(|lp| inscribed_centre(&domain.positions, lp)).collect();
 
