@@ -43,11 +43,15 @@ fn main() {
         }
     }
     println!("whole pipeline, native\n{PLAN_HEADER}");
-    for (name, mesh, shared) in &cases {
-        let row = if *shared { run_plan_scaled(name, mesh, &now) } else { run_plan(name, mesh, &now) };
-        match row {
-            Ok(row) => println!("{row}"),
-            Err(e) => println!("{name:<24} cannot be planned: {e}"),
+    // On a thread of the pool, as the CLI runs (see src/bin/slitpath/main.rs).
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(8 << 20).build_global();
+    rayon::scope(|_| {
+        for (name, mesh, shared) in &cases {
+            let row = if *shared { run_plan_scaled(name, mesh, &now) } else { run_plan(name, mesh, &now) };
+            match row {
+                Ok(row) => println!("{row}"),
+                Err(e) => println!("{name:<24} cannot be planned: {e}"),
+            }
         }
-    }
+    });
 }
