@@ -122,7 +122,8 @@ pub enum PlanError {
     Verify(#[from] VerifyError),
 }
 
-/// Stage timings, milliseconds. `flatten` includes the rim refinement before it. `post` and
+/// Stage timings, milliseconds. `flatten` includes the rim refinement before it; `slitmap`
+/// ends when the exact-facet structures built beside both are done (on wasm, after them). `post` and
 /// `verify` run side by side (natively): `verify` is the span from their common start to the
 /// verifier's end, and `total` (the wall time of every stage) counts that span once.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -209,7 +210,8 @@ pub fn planning_surface(surface: &Surface) -> Surface {
 
 impl Planner {
     /// Refines the hole rims ([`crate::mesh::refine`]; `surface` is then the refined surface, the
-    /// part's vertices first), flattens it and factorises the slit map once.
+    /// part's vertices first), flattens it and factorises the slit map once; beside those, the
+    /// crease-split surface and the facet tree that [`Facets::Exact`] plans use.
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;

@@ -539,10 +539,8 @@ impl SlitMapSolver {
         // place of its last vertex.
         let order = mesh_order(n, &fem_triangles)?;
         // (b) θ_h: Neumann Laplacian with vertex 0 fixed (θ_h = 0 there; the rotation is fixed
-        // afterwards).
-        let fixed = 0;
-        let theta_unknown: Vec<Option<usize>> =
-            (0..n).map(|v| (v != fixed).then(|| v - usize::from(v > fixed))).collect();
+        // afterwards): vertex v > 0 is unknown v − 1.
+        let theta_unknown: Vec<Option<usize>> = (0..n).map(|v| v.checked_sub(1)).collect();
         let n_theta = n - 1;
         // The two factorisations are independent: side by side.
         let (h_chol, theta_chol) = crate::par::join(

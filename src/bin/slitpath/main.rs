@@ -293,10 +293,9 @@ mod cli {
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() {
-    // On a thread of the pool: the stages' parallel parts then hand work to the other threads
-    // directly, instead of each waking the pool from outside and waiting (40-60 ms of a 40k
-    // plan).
-    // With the main thread's stack size, since the whole run is on a pool thread now.
+    // The run is on a thread of the pool (with the main thread's stack size): the stages'
+    // parallel parts then share work with the other threads directly, instead of each waking
+    // the pool from outside and waiting (40-60 ms of a 40k-face plan).
     let _ = rayon::ThreadPoolBuilder::new().stack_size(8 << 20).build_global();
     if let Err(message) = rayon::scope(|_| cli::run()) {
         eprintln!("slitpath: error: {message}");
