@@ -266,38 +266,15 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
         crate::par::join(|| sample_surface(surface, options.samples, options.seed), || SweptVolume::new(passes, r));
     let (samples, volume) = (samples?, volume?);
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
-    let mut scallops = Vec::with_capacity(samples.len());
-    let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
-    let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
-    let (mut ct_sum, mut ct2_sum, mut max_ct) = (0u64, 0u64, 0u32);
-    let mut worst: Option<(f64, DVec3)> = None;
-    let origin = surface.positions.iter().fold(DVec3::splat(f64::INFINITY), |m, &p| m.min(p));
-    for (s, probe) in samples.iter().zip(probes) {
-        if probe.depth > options.gouge_tolerance_mm {
-            gouges += 1;
-            max_gouge = max_gouge.max(probe.depth);
-        }
-        let ct = probe.passes_over;
-        ct_sum += ct as u64;
-        ct2_sum += (ct as u64) * (ct as u64);
-        max_ct = max_ct.max(ct);
-        if let Some(t) = probe.scallop {
-            scallops.push(t);
-            let key = ((s.position - origin) / cell).floor();
-            cells.push(([key.x as i64, key.y as i64, key.z as i64], t));
-            if !matches!(worst, Some((w, _)) if w >= t) {
-                worst = Some((t, s.position));
-            }
-        }
-    }
+    // The figures of the samples (sequential: sums and sorts) beside the probes of the vertices.
+    let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
+    let (figures, vertex_probes) = crate::par::join(
+        || sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm),
+        || probe_all(&volume, surface.positions.len(), vertex, h, search),
+    );
+    let SampleFigures { scallops, mean, uncovered, gouges, max_gouge, ct_sum, ct2_sum, max_ct, v_max, v_cells, worst } =
+        figures;
     let n = samples.len();
-    let uncovered = n - scallops.len();
-    let mean = if scallops.is_empty() { 0.0 } else { scallops.iter().sum::<f64>() / scallops.len() as f64 };
-    scallops.sort_unstable_by(f64::total_cmp);
-    let (v_max, v_cells) = max_variance(cells);
-
-    let nv = surface.positions.len();
-    let vertex_probes = probe_all(&volume, nv, |v| (surface.positions[v], surface.vertex_normals[v]), h, search);
     let vertex_scallop_mm = vertex_probes.iter().map(|p| p.scallop.unwrap_or(search)).collect();
     let vertex_uncovered = vertex_probes.iter().map(|p| p.scallop.is_none()).collect();
     let area_per_sample = surface.area() / n as f64;
@@ -322,6 +299,59 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
         vertex_uncovered,
         worst_sample: worst.map(|(_, p)| p.to_array()),
     })
+}
+
+/// What the samples' probes sum up to (see [`Verification`]); `scallops` sorted.
+struct SampleFigures {
+    scallops: Vec<f64>,
+    mean: f64,
+    uncovered: usize,
+    gouges: usize,
+    max_gouge: f64,
+    ct_sum: u64,
+    ct2_sum: u64,
+    max_ct: u32,
+    v_max: f64,
+    v_cells: usize,
+    worst: Option<(f64, DVec3)>,
+}
+
+fn sample_figures(
+    surface: &Surface,
+    samples: &[SurfaceSample],
+    probes: &[Probe],
+    cell: f64,
+    gouge_tolerance_mm: f64,
+) -> SampleFigures {
+    let mut scallops = Vec::with_capacity(samples.len());
+    let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
+    let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
+    let (mut ct_sum, mut ct2_sum, mut max_ct) = (0u64, 0u64, 0u32);
+    let mut worst: Option<(f64, DVec3)> = None;
+    let origin = surface.positions.iter().fold(DVec3::splat(f64::INFINITY), |m, &p| m.min(p));
+    for (s, probe) in samples.iter().zip(probes) {
+        if probe.depth > gouge_tolerance_mm {
+            gouges += 1;
+            max_gouge = max_gouge.max(probe.depth);
+        }
+        let ct = probe.passes_over;
+        ct_sum += ct as u64;
+        ct2_sum += (ct as u64) * (ct as u64);
+        max_ct = max_ct.max(ct);
+        if let Some(t) = probe.scallop {
+            scallops.push(t);
+            let key = ((s.position - origin) / cell).floor();
+            cells.push(([key.x as i64, key.y as i64, key.z as i64], t));
+            if !matches!(worst, Some((w, _)) if w >= t) {
+                worst = Some((t, s.position));
+            }
+        }
+    }
+    let uncovered = samples.len() - scallops.len();
+    let mean = if scallops.is_empty() { 0.0 } else { scallops.iter().sum::<f64>() / scallops.len() as f64 };
+    scallops.sort_unstable_by(f64::total_cmp);
+    let (v_max, v_cells) = max_variance(cells);
+    SampleFigures { scallops, mean, uncovered, gouges, max_gouge, ct_sum, ct2_sum, max_ct, v_max, v_cells, worst }
 }
 
 /// Probes the `n` points `at(i)` (position, normal), in index order.
