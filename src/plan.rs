@@ -123,7 +123,7 @@ pub enum PlanError {
 }
 
 /// Stage timings, milliseconds. `flatten` includes the rim refinement before it; `slitmap`
-/// ends when the exact-facet structures built beside both are done (on wasm, after them). `post` and
+/// ends when the facet tree and the crease-split surface built beside both are done (on wasm, after them). `post` and
 /// `verify` run side by side (natively): `verify` is the span from their common start to the
 /// verifier's end, and `total` (the wall time of every stage) counts that span once.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -149,7 +149,8 @@ pub struct Planner {
     pub solver: SlitMapSolver,
     /// Timings of the per-part work (`read` is the caller's, when it measured it).
     pub prepare_ms: Timings,
-    /// The facet tree the toolpath clears [`Facets::Exact`] contacts against.
+    /// The facet tree of `surface` (and of `creased`: same positions and triangles), which the
+    /// spacing's gate projects onto and the toolpath clears [`Facets::Exact`] contacts against.
     faces: FaceTree,
     /// `surface` with its normals split at sharp creases, which the ball rides with
     /// [`Facets::Exact`].
@@ -211,15 +212,15 @@ pub fn planning_surface(surface: &Surface) -> Surface {
 impl Planner {
     /// Refines the hole rims ([`crate::mesh::refine`]; `surface` is then the refined surface, the
     /// part's vertices first), flattens it and factorises the slit map once; beside those, the
-    /// crease-split surface and the facet tree that [`Facets::Exact`] plans use.
+    /// crease-split surface and the facet tree.
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;
         // The rim refinement prepares the surface for the flattening: its time counts there.
         let t = now();
         let surface = planning_surface(&surface);
-        // What exact facets need depends on the part alone: built beside the conformal stages,
-        // which leave a thread idle most of their time.
+        // The facet tree and the crease-split surface depend on the part alone: built beside the
+        // conformal stages, which leave a thread idle most of their time.
         let ((creased, faces), prepared) = crate::par::beside(
             || (surface.with_crease_normals(CREASE_SPLIT_DEG), FaceTree::new(&surface.positions, &surface.triangles)),
             || -> Result<_, PlanError> {
@@ -309,10 +310,9 @@ impl Planner {
         let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
         let cleared = match options.facets {
             Facets::Exact => {
-                let faces = &self.faces;
                 let tolerance = spiral_options.chord_tolerance_mm;
                 let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
-                Some(toolpath::clear_facets(faces, &designed, &designed_normals, &cc_faces, r, tolerance))
+                Some(toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, tolerance))
             }
             Facets::Smooth => None,
         };
@@ -408,7 +408,8 @@ impl Planner {
         };
         // One inverse map for the spacing and the spiral.
         let lift = Lift::new(self.riding(options.facets), &map);
-        let rings = spacing::spacing_on(&lift, &spacing_options);
+        // The part's facet tree: the crease-split surface has the same positions and triangles.
+        let rings = spacing::spacing_on(&lift, &self.faces, &spacing_options);
         timings.spacing += now() - t;
         let rings = rings?;
         stage(2);

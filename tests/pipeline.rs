@@ -424,3 +424,19 @@ fn spacing_and_spiral_refuse_a_map_of_another_mesh() {
         Err(SpiralError::MeshMismatch { map, surface }) if map == map_n && surface == surface_n
     ));
 }
+
+/// `spacing_on` takes the part's facet tree from its caller: one of another mesh is refused.
+#[test]
+fn spacing_refuses_a_facet_tree_of_another_mesh() {
+    use slitpath::mesh::nearest::FaceTree;
+    use slitpath::spacing::{self, Lift, SpacingError, SpacingOptions};
+    let part = planner("plate_3_holes");
+    let planned = plan(&part, &PlanOptions::default());
+    let other = planner("saddle_2_holes").surface;
+    let tree = FaceTree::new(&other.positions, &other.triangles);
+    let lift = Lift::new(&part.surface, &planned.map);
+    assert_eq!(
+        spacing::spacing_on(&lift, &tree, &SpacingOptions::default()),
+        Err(SpacingError::FacetTreeMismatch { tree: other.triangles.len(), surface: part.surface.triangles.len() })
+    );
+}

@@ -50,6 +50,11 @@ pub struct Nearest {
 }
 
 impl FaceTree {
+    /// Number of faces in the tree.
+    pub fn face_count(&self) -> usize {
+        self.slot_of.len()
+    }
+
     /// Builds the tree of the triangles `triangles` over `positions` (indices must be valid).
     pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> Self {
         let corners: Vec<[DVec3; 3]> = triangles.iter().map(|t| t.map(|v| positions[v as usize])).collect();

@@ -11,6 +11,7 @@
 //! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
 //! such gaps at up to 1.3 h on the shared meshes).
 
+use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
 use crate::slitmap::SlitMap;
 use glam::{DVec2, DVec3};
@@ -86,11 +87,12 @@ impl ByRadius {
 }
 
 impl<'a> Gate<'a> {
-    pub(super) fn new(surface: &'a Surface, map: &SlitMap, radius_mm: f64) -> Self {
+    /// `faces`: the facet tree of `surface`.
+    pub(super) fn new(surface: &'a Surface, map: &SlitMap, faces: &FaceTree, radius_mm: f64) -> Self {
         let corners = map.log_polar_corners();
         // The hole-end points (a nearest-face search) beside the edges.
         let (tips, edges) =
-            crate::par::join(|| tip_points(surface, map, &corners, radius_mm), || edges_of(surface, map));
+            crate::par::join(|| tip_points(surface, map, &corners, faces, radius_mm), || edges_of(surface, map));
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = surface
@@ -241,7 +243,13 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
 /// projected onto the surface; sorted by |w|. The rings turn round a hole's end there and leave
 /// spikes narrower than the edge and line points (featuretype: 1.42 h at 0.18 R from a hole's
 /// corner, cut 2 µm away).
-fn tip_points(surface: &Surface, map: &SlitMap, corners: &[[DVec2; 3]], radius_mm: f64) -> Vec<GatePoint> {
+fn tip_points(
+    surface: &Surface,
+    map: &SlitMap,
+    corners: &[[DVec2; 3]],
+    tree: &FaceTree,
+    radius_mm: f64,
+) -> Vec<GatePoint> {
     let mut tips: Vec<u32> = Vec::new();
     for slit in &map.slits {
         let lp = &surface.loops[slit.hole];
@@ -256,7 +264,6 @@ fn tip_points(surface: &Surface, map: &SlitMap, corners: &[[DVec2; 3]], radius_m
             }
         }
     }
-    let tree = crate::mesh::nearest::FaceTree::new(&surface.positions, &surface.triangles);
     let reach = 0.5 * radius_mm;
     // One job per tip and grid ring, on the pool; in order, so the same points on any threads.
     let per_tip = crate::par::each(tips.len() * TIP_RINGS, |job| {

@@ -48,6 +48,7 @@ mod lift;
 
 pub use lift::{Lift, Lifted};
 
+use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
 use crate::slitmap::{Mode, SlitMap};
 use glam::{DVec2, DVec3};
@@ -94,6 +95,8 @@ pub enum SpacingError {
     InvalidOption(String),
     #[error("the slit map has {map} vertices but the surface {surface}: they must come from the same mesh")]
     MeshMismatch { map: usize, surface: usize },
+    #[error("the facet tree has {tree} faces but the surface {surface}: it must be built on the same mesh")]
+    FacetTreeMismatch { tree: usize, surface: usize },
     #[error("the ball (radius {radius_mm} mm) cuts the whole part from its centre: choose a smaller tool")]
     ToolLargerThanPart { radius_mm: f64 },
     #[error("no ring radius below {radius} covers the next band (ring {ring}): the surface cannot be cut with this ball here")]
@@ -199,14 +202,20 @@ pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Re
     if let Some((map_vertices, surface_vertices)) = Lift::mismatch(surface, map) {
         return Err(SpacingError::MeshMismatch { map: map_vertices, surface: surface_vertices });
     }
-    Spacer::new(&Lift::new(surface, map), options).run()
+    let faces = FaceTree::new(&surface.positions, &surface.triangles);
+    Spacer::new(&Lift::new(surface, map), &faces, options).run()
 }
 
 /// The ring radii for the map `lift` inverts, on its surface (the lift built once per map is
-/// shared with [`crate::spiral::spiral_on`]).
-pub fn spacing_on(lift: &Lift<'_>, options: &SpacingOptions) -> Result<Rings, SpacingError> {
+/// shared with [`crate::spiral::spiral_on`]); `faces` is the facet tree of that surface (a
+/// planner keeps one per part).
+pub fn spacing_on(lift: &Lift<'_>, faces: &FaceTree, options: &SpacingOptions) -> Result<Rings, SpacingError> {
     check_options(options)?;
-    Spacer::new(lift, options).run()
+    let surface_faces = lift.surface().triangles.len();
+    if faces.face_count() != surface_faces {
+        return Err(SpacingError::FacetTreeMismatch { tree: faces.face_count(), surface: surface_faces });
+    }
+    Spacer::new(lift, faces, options).run()
 }
 
 fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
@@ -355,7 +364,7 @@ struct Band {
 }
 
 impl<'a> Spacer<'a> {
-    fn new(lift: &'a Lift<'a>, options: &SpacingOptions) -> Self {
+    fn new(lift: &'a Lift<'a>, faces: &FaceTree, options: &SpacingOptions) -> Self {
         let (surface, map) = (lift.surface(), lift.map());
         // In the log-polar strip the two sides of a slit are exactly on its line (see `lift`):
         // only radii within rounding of the slit radius are ambiguous.
@@ -394,7 +403,7 @@ impl<'a> Spacer<'a> {
         // Independent indexes of the same map, built side by side.
         let ((corners, creases), gate) = crate::par::join(
             || (corner_angles(surface, map), creases(surface, map)),
-            || gate::Gate::new(surface, map, options.radius_mm),
+            || gate::Gate::new(surface, map, faces, options.radius_mm),
         );
         Self {
             lift,
