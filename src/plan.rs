@@ -356,6 +356,9 @@ impl Planner {
                     Facets::Exact => spiral_options.chord_tolerance_mm,
                     Facets::Smooth => facet_tolerance_mm(&self.surface, r).max(spiral_options.chord_tolerance_mm),
                 },
+                // Where the spacing does not plan for the balls' lift off the facets.
+                valley_lift_mm: (options.facets == Facets::Exact)
+                    .then_some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
                 ..VerifyOptions::default()
             };
             Ok(Some(verify::verify(self.riding(options.facets), &[centres], &verify_options)?))
@@ -404,6 +407,7 @@ impl Planner {
         let spacing_options = SpacingOptions {
             radius_mm: options.radius_mm,
             scallop_mm: options.scallop_mm,
+            facet_lift: options.facets == Facets::Exact,
             ..SpacingOptions::default()
         };
         // One inverse map for the spacing and the spiral.

@@ -356,14 +356,63 @@ fn issue_4_exact_facets_ride_the_flat_of_a_cad_part_flat() {
         .map(|i| v.vertex_scallop_mm[i])
         .fold(0.0, f64::max);
     assert!(flat_max <= 1.02 * h, "flat: {} h", flat_max / h);
-    // On the cone the clearance's lifts are not modelled by the spacing (measured 1.52 h).
-    assert!(
-        v.max_scallop_mm <= 2.0 * h && v.p99_scallop_mm <= h,
-        "{} h, p99 {} h",
-        v.max_scallop_mm / h,
-        v.p99_scallop_mm / h
-    );
+    // On the cone the clearance lifts the balls by up to 13 µm = 0.64 h off its creases: the
+    // spacing plans for that lift (1.52 h when it did not).
+    assert!(v.max_scallop_mm <= 1.02 * h, "{} h, p99 {} h", v.max_scallop_mm / h, v.p99_scallop_mm / h);
     assert_eq!(v.gouges, 0);
+}
+
+#[test]
+fn issue_4_exact_facets_keep_the_scallop_outside_the_facet_valleys() {
+    // wavy_mesh_with_hole's facets turn 10–14° at its bench scale (h = R/150): a ball riding
+    // them exactly lifts by up to about 2 h in the valleys between them, where no path can leave
+    // less. The verifier reports those faces apart; elsewhere the spacing keeps h (1.36 h before
+    // it planned for the lifts).
+    let name = "wavy_mesh_with_hole.stl";
+    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
+        eprintln!("skipped: {name} is absent");
+        return;
+    };
+    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
+    let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
+    let r = (hi - lo).length() / 60.0;
+    let options = PlanOptions {
+        radius_mm: r,
+        scallop_mm: r / 150.0,
+        axes: slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 },
+        post: Post::Cl,
+        ..PlanOptions::default()
+    };
+    let p = Planner::new(out, &|| 0.0).expect("planner");
+    let pl = plan(&p, &options);
+    let v = pl.verification().expect("verified");
+    let h = options.scallop_mm;
+    let share = v.valley_area_mm2 / p.surface.area();
+    println!(
+        "{name}: max {:.3} h; valleys {:.1} % of the area; elsewhere max {:.3} h",
+        v.max_scallop_mm / h,
+        100.0 * share,
+        v.max_scallop_outside_valleys_mm / h
+    );
+    assert!(share > 0.0 && share < 0.25, "valleys: {share}");
+    assert!(v.max_scallop_mm > 1.02 * h, "the valleys keep more than h");
+    assert!(v.max_scallop_outside_valleys_mm <= 1.02 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    assert_eq!(v.gouges, 0);
+}
+
+#[test]
+fn issue_4_exact_facets_plan_for_the_balls_lift_off_curved_facets() {
+    // plate_holes' curved regions are coarse CAD facets whose recomputed normals tilt about 5.5°
+    // from the facets at their edges: the clearance lifts the balls there by up to 0.69 h, and
+    // the scallop beside them rose to 1.36 h while the spacing planned for balls on the facets.
+    let name = "plate_holes.stl";
+    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
+        eprintln!("skipped: {name} is absent");
+        return;
+    };
+    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
+    let options = PlanOptions { post: Post::Cl, ..PlanOptions::default() };
+    assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
 }
 
 #[test]

@@ -428,6 +428,58 @@ fn reruns_are_identical() {
     assert_ne!(a.mean_scallop_mm, c.mean_scallop_mm);
 }
 
+/// A V-groove along the y axis, its two flanks rising at `half_deg` from z = 0 towards the tool,
+/// triangulated on a 2 mm grid over [−10, 10]²: the vertex normals on the groove's floor are the
+/// bisector, tilted `half_deg` from both flanks' facets.
+fn v_groove(half_deg: f64) -> Surface {
+    let slope = half_deg.to_radians().tan();
+    let n = 10;
+    let positions = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (x, y) = (-10.0 + 2.0 * i as f64, -10.0 + 2.0 * j as f64);
+            DVec3::new(x, y, slope * x.abs())
+        })
+        .collect();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    surface_of(&TriMesh { positions, triangles })
+}
+
+#[test]
+fn facet_valleys_are_the_faces_where_the_ball_rides_up_off_the_facets() {
+    // A ball along the floor's normal, tilted α from a flank, clears it only R(1/cos α − 1)
+    // higher: 22.6 µm at α = 7°, 7.3 µm at α = 4°. With a 15 µm threshold the faces touching the
+    // floor of the 7° groove are valleys (two 2 mm strips, 20 mm long, on flanks at 7°) and none
+    // of the 4° groove's.
+    let passes: Vec<Vec<DVec3>> =
+        (-12..=12).map(|k| vec![DVec3::new(k as f64, -12.0, R + 2.0), DVec3::new(k as f64, 12.0, R + 2.0)]).collect();
+    let options = VerifyOptions { samples: 20_000, valley_lift_mm: Some(0.015), ..VerifyOptions::default() };
+    let steep = v_groove(7.0);
+    let v = verify(&steep, &passes, &options).unwrap();
+    let strips = 2.0 * (2.0 / 7f64.to_radians().cos()) * 20.0;
+    assert!(
+        (v.valley_area_mm2 - strips).abs() < 1e-9 * strips,
+        "{} mm² of valleys, {strips} expected",
+        v.valley_area_mm2
+    );
+    assert!(v.max_scallop_outside_valleys_mm <= v.max_scallop_mm && v.max_scallop_outside_valleys_mm > 0.0);
+    // The floor is the lowest place under the passes: its scallop is only inside the valleys.
+    assert!(v.max_scallop_outside_valleys_mm < v.max_scallop_mm);
+    let shallow = verify(&v_groove(4.0), &passes, &options).unwrap();
+    assert_eq!(shallow.valley_area_mm2, 0.0);
+    assert_eq!(shallow.max_scallop_outside_valleys_mm, shallow.max_scallop_mm);
+    // Without the option no face is a valley.
+    let plain = verify(&steep, &passes, &VerifyOptions { valley_lift_mm: None, ..options }).unwrap();
+    assert_eq!((plain.valley_area_mm2, plain.max_scallop_outside_valleys_mm), (0.0, plain.max_scallop_mm));
+}
+
 #[test]
 fn bad_input_gives_typed_errors() {
     let (surface, passes) = freeform_case();
@@ -445,6 +497,8 @@ fn bad_input_gives_typed_errors() {
     invalid(VerifyOptions { cell_mm: Some(f64::INFINITY), ..o.clone() });
     invalid(VerifyOptions { gouge_tolerance_mm: -1e-3, ..o.clone() });
     invalid(VerifyOptions { max_scallop_search_mm: Some(-1.0), ..o.clone() });
+    invalid(VerifyOptions { valley_lift_mm: Some(-1e-3), ..o.clone() });
+    invalid(VerifyOptions { valley_lift_mm: Some(f64::NAN), ..o.clone() });
     assert_eq!(verify(&surface, &[], &o), Err(VerifyError::EmptyPath));
     assert_eq!(verify(&surface, &[vec![], vec![]], &o), Err(VerifyError::EmptyPath));
     assert_eq!(verify(&surface, &[vec![DVec3::ZERO], vec![]], &o), Err(VerifyError::EmptyPass { pass: 1 }));

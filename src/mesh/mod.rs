@@ -126,6 +126,13 @@ impl Surface {
         }
     }
 
+    /// How far a ball of radius `r` placed along a normal of `face` is moved out along it to
+    /// clear the face's plane ([`ball_lift_mm`]), at most: the normals inside a face are
+    /// normalised means of its corners', so none tilts more from the face's than theirs.
+    pub fn face_lift_mm(&self, face: usize, r: f64) -> f64 {
+        (0..3).map(|k| ball_lift_mm(self.corner_normal(face, k), self.face_normals[face], r)).fold(0.0, f64::max)
+    }
+
     /// The unit normal at barycentric `bary` of `face`: the corner normals interpolated, the
     /// face normal where they cancel.
     pub fn normal_at(&self, face: usize, bary: [f64; 3]) -> DVec3 {
@@ -228,6 +235,19 @@ pub fn load(bytes: &[u8], options: &MeshOptions) -> Result<MeshOutput, MeshError
     check_options(options)?;
     let soup = stl::read(bytes, options.max_triangles)?;
     from_triangles(&soup, options)
+}
+
+/// How far a ball of radius `r` placed along the unit normal `n` at a point of a facet with unit
+/// normal `facet` must move out along `n` to touch the facet's plane instead of dipping into it:
+/// R(1/cos α − 1), α the angle between them (infinite when `n` does not face the same side).
+/// With exact facets the toolpath moves it so (`toolpath::clear_facets`).
+pub fn ball_lift_mm(n: DVec3, facet: DVec3, r: f64) -> f64 {
+    let cos = n.dot(facet);
+    if cos > 0.0 {
+        r * (1.0 / cos - 1.0)
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Same as [`load`] from a triangle soup or an indexed mesh (corners are welded again).

@@ -9,7 +9,8 @@
 //! least three, at most [`STRIP`]·R apart on the surface) and on a fine polar grid round each
 //! hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
 //! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
-//! such gaps at up to 1.3 h on the shared meshes).
+//! such gaps at up to 1.3 h on the shared meshes). With exact facets each point is first taken
+//! lower by the lift the spacing plans for a ball touching there (see `Spacer::lift_mm`).
 
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
@@ -25,11 +26,14 @@ const LINE_STEP: f64 = 0.25;
 const EDGE_STEP: f64 = 1.0 / 16.0;
 const EDGE_MIN: f64 = 4.0;
 
-/// A point to test: surface point, unit normal, |w|, arg w.
+/// A point to test: surface point, unit normal, |w|, arg w. The point is taken lower along its
+/// normal by the lift of a ball touching there off its facet that the spacing plans for (see
+/// `Spacer::lift_mm`), so that S^h is tested where the lifted balls must reach.
 pub(super) type GatePoint = (DVec3, DVec3, f64, f64);
 
-/// An edge: its vertices, the normals at both ends, the log-polar image of both ends.
-type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2);
+/// An edge: its vertices, the normals at both ends, the log-polar image of both ends, a face
+/// on it (on the side of those normals).
+type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2, usize);
 
 /// Where each band is tested, precomputed per map.
 pub(super) struct Gate<'a> {
@@ -50,6 +54,8 @@ pub(super) struct Gate<'a> {
     face_index: ByRadius,
     edge_index: ByRadius,
     radius_mm: f64,
+    /// The user's h when the balls' lift off the facets is planned for.
+    lift_h: Option<f64>,
 }
 
 /// Items with a |w| range, for "which overlap (lo, hi)": the narrow ones sorted by their top,
@@ -88,11 +94,19 @@ impl ByRadius {
 
 impl<'a> Gate<'a> {
     /// `faces`: the facet tree of `surface`.
-    pub(super) fn new(surface: &'a Surface, map: &SlitMap, faces: &FaceTree, radius_mm: f64) -> Self {
+    pub(super) fn new(
+        surface: &'a Surface,
+        map: &SlitMap,
+        faces: &FaceTree,
+        radius_mm: f64,
+        lift_h: Option<f64>,
+    ) -> Self {
         let corners = map.log_polar_corners();
         // The hole-end points (a nearest-face search) beside the edges.
-        let (tips, edges) =
-            crate::par::join(|| tip_points(surface, map, &corners, faces, radius_mm), || edges_of(surface, map));
+        let (tips, edges) = crate::par::join(
+            || tip_points(surface, map, &corners, faces, radius_mm, lift_h),
+            || edges_of(surface, map),
+        );
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = surface
@@ -114,7 +128,7 @@ impl<'a> Gate<'a> {
             .collect();
         let face_index = ByRadius::new(rho_range.iter().copied());
         let edge_index = ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y))));
-        Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm }
+        Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm, lift_h }
     }
 
     /// The points of the band between rings `lo` < `hi` where its scallop may peak, that
@@ -137,13 +151,13 @@ impl<'a> Gate<'a> {
         };
         let faces = chunked(self.face_index.near(lo, hi).collect(), &|f, out| self.face_lines(f, lo, hi, out));
         let edges = chunked(self.edge_index.near(lo, hi).collect(), &|e, out| {
-            let ([a, b], normals, wa, wb) = self.edges[e];
+            let ([a, b], normals, wa, wb, face) = self.edges[e];
             // The part of the edge inside the band.
             let (u0, u1) = clip(wa.y, wb.y, lo, hi);
             if u1 > u0 {
                 let ab = [a as usize, b as usize];
                 let (p, q) = (self.end(ab, normals, wa, wb, u0), self.end(ab, normals, wa, wb, u1));
-                line(p, q, EDGE_STEP * self.radius_mm, EDGE_MIN, out);
+                line(p, q, EDGE_STEP * self.radius_mm, EDGE_MIN, self.lift_of(face), out);
             }
         });
         let first = self.tips.partition_point(|p| p.2 <= lo);
@@ -180,9 +194,14 @@ impl<'a> Gate<'a> {
                 }
             }
             if found == 2 {
-                line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0, out);
+                line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0, self.lift_of(f), out);
             }
         }
+    }
+
+    /// What the planned lift of a ball touching face `f` depends on (see [`Lowered`]).
+    fn lift_of(&self, f: usize) -> Option<Lowered> {
+        self.lift_h.map(|h| (self.surface.face_normals[f], self.radius_mm, h))
     }
 
     /// The point at `u` along the edge from vertex `vi` to `vj`.
@@ -196,14 +215,28 @@ impl<'a> Gate<'a> {
 const CHUNK: usize = 256;
 
 /// Points spaced at most `step` (at least `min`) along the segment between two ends, the middles
-/// of equal pieces.
-fn line(a: End, b: End, step: f64, min: f64, out: &mut Vec<GatePoint>) {
+/// of equal pieces, lowered by their planned lift when `lift` is given.
+fn line(a: End, b: End, step: f64, min: f64, lift: Option<Lowered>, out: &mut Vec<GatePoint>) {
     let m = ((b.0 - a.0).length() / step).ceil().max(min) as usize;
+    let first = out.len();
     for i in 0..m {
         let u = (i as f64 + 0.5) / m as f64;
         let w = a.2.lerp(b.2, u);
         out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
     }
+    if let Some(lift) = lift {
+        for p in &mut out[first..] {
+            p.0 = lowered(p.0, p.1, lift);
+        }
+    }
+}
+
+/// A face's normal, R and the user's h: what the planned lift of a ball touching it depends on.
+type Lowered = (DVec3, f64, f64);
+
+/// `p` (unit normal `n`) taken lower by the planned lift of a ball touching there.
+fn lowered(p: DVec3, n: DVec3, (facet, r, h): Lowered) -> DVec3 {
+    p - n * super::facet_lift_mm(n, facet, r, h)
 }
 
 /// Every edge of the surface with its corner normals and log-polar ends, once per side of an edge
@@ -233,7 +266,7 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
         .map(|e| {
             let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
             b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
-            (e.0, normals(e), a, b)
+            (e.0, normals(e), a, b, e.1)
         })
         .collect()
 }
@@ -249,6 +282,7 @@ fn tip_points(
     corners: &[[DVec2; 3]],
     tree: &FaceTree,
     radius_mm: f64,
+    lift_h: Option<f64>,
 ) -> Vec<GatePoint> {
     let mut tips: Vec<u32> = Vec::new();
     for slit in &map.slits {
@@ -284,7 +318,10 @@ fn tip_points(
                 normal += b * surface.corner_normal(hit.face, k);
                 w += b * c;
             }
-            out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
+            let normal = normal.normalize_or_zero();
+            let p = lift_h
+                .map_or(hit.point, |h| lowered(hit.point, normal, (surface.face_normals[hit.face], radius_mm, h)));
+            out.push((p, normal, w.y, w.x));
         }
         out
     });

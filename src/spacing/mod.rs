@@ -26,6 +26,11 @@
 //! every face of the band and round the ends of holes must lie within R of the ball-centre
 //! polylines of rings k and k+1; where some do not, the ring moves up until they do.
 //!
+//! With exact facets ([`SpacingOptions::facet_lift`]) the toolpath moves every ball centre off
+//! the facets, along the interpolated normal: where that normal is tilted from the facet's, the
+//! ball rides higher than the rings were spaced for, and the scallop beside it rises by as much.
+//! The points tested are then taken that much lower (within bounds, see `facet_lift_mm`).
+//!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
 //! in annulus mode the last ring is the inner circle |w| = R_A itself (the spiral ends on it).
@@ -73,6 +78,9 @@ pub struct SpacingOptions {
     pub step_tolerance: f64,
     /// More rings than this is an error (the options are surely wrong). Default 20 000.
     pub max_rings: usize,
+    /// The toolpath moves every ball centre off the facets (exact facets, see
+    /// [`crate::toolpath::clear_facets`]): plan for that lift. Default false (smooth facets).
+    pub facet_lift: bool,
 }
 
 impl Default for SpacingOptions {
@@ -84,6 +92,7 @@ impl Default for SpacingOptions {
             meridian_spacing_mm: None,
             step_tolerance: 2e-3,
             max_rings: 20_000,
+            facet_lift: false,
         }
     }
 }
@@ -255,6 +264,9 @@ struct Spacer<'a> {
     r_min: f64,
     ball: f64,
     h: f64,
+    /// The user's h, when the balls' lifts off the facets are planned for (some facet of the
+    /// part tilts enough from its corners' normals to need it: see [`Spacer::lift_mm`]).
+    lift_h: Option<f64>,
     meridian_mm: f64,
     /// arg w and |w| of the corners of the outer loop (and of the annulus' inner loop).
     corners: Vec<(f64, f64)>,
@@ -290,6 +302,29 @@ const GATE_BISECTIONS: usize = 6;
 const GATE_BISECTION_MARGIN: f64 = 0.95;
 /// A gate polyline's chords stay within this fraction of h of the ring.
 const GATE_SAG: f64 = 0.02;
+
+/// Lifts off the facets up to this fraction of h are left to the target's margin.
+const LIFT_FREE: f64 = 0.1;
+/// Lifts are planned for up to this fraction of h.
+const LIFT_CAP: f64 = 0.65;
+/// Lifts above this fraction of h are not planned for at all (see [`facet_lift_mm`]): the
+/// verifier reports the faces where they occur as facet valleys.
+pub const LIFT_VALLEY: f64 = 0.75;
+
+/// The part of a ball's lift off a facet the spacing plans for (see [`Spacer::lift_mm`]): the
+/// ball of radius `r` at a contact of unit normal `n` on a facet of normal `facet`.
+fn facet_lift_mm(n: DVec3, facet: DVec3, r: f64, h: f64) -> f64 {
+    let lift = crate::mesh::ball_lift_mm(n, facet, r);
+    if lift > LIFT_VALLEY * h {
+        return 0.0; // a faceted valley: no ring can leave less than about the lift there
+    }
+    (lift - LIFT_FREE * h).clamp(0.0, LIFT_CAP * h)
+}
+
+/// Whether a ball on some facet of `surface` lifts by more than [`LIFT_FREE`]·h.
+fn lifts_off_facets(surface: &Surface, r: f64, h: f64) -> bool {
+    (0..surface.triangles.len()).any(|f| !(surface.face_lift_mm(f, r) <= LIFT_FREE * h))
+}
 
 /// A boundary vertex whose edges turn by more than this (in 3D) is a corner.
 const CORNER_TURN: f64 = 25.0 * PI / 180.0;
@@ -400,10 +435,12 @@ impl<'a> Spacer<'a> {
                 _ => merged.push((lo, hi)),
             }
         }
+        let lift_h = (options.facet_lift && lifts_off_facets(surface, options.radius_mm, options.scallop_mm))
+            .then_some(options.scallop_mm);
         // Independent indexes of the same map, built side by side.
         let ((corners, creases), gate) = crate::par::join(
             || (corner_angles(surface, map), creases(surface, map)),
-            || gate::Gate::new(surface, map, faces, options.radius_mm),
+            || gate::Gate::new(surface, map, faces, options.radius_mm, lift_h),
         );
         Self {
             lift,
@@ -417,6 +454,7 @@ impl<'a> Spacer<'a> {
             r_min,
             ball: options.radius_mm,
             h: options.scallop_mm * options.target_fraction,
+            lift_h,
             meridian_mm: options.meridian_spacing_mm.unwrap_or(0.5 * options.radius_mm),
             options: options.clone(),
             trials: 0,
@@ -800,10 +838,24 @@ impl<'a> Spacer<'a> {
         self.lift.polar(rho, theta).ok_or(SpacingError::Lift { rho, theta })
     }
 
-    /// Point of S^h on the meridian θ at radius s.
+    /// Point of S^h on the meridian θ at radius s, lowered by the ball's expected lift there
+    /// ([`Spacer::lift_mm`]).
     fn q(&self, s: f64, theta: f64) -> Result<DVec3, SpacingError> {
         let l = self.point(s, theta)?;
-        Ok(l.p + l.n * self.h)
+        Ok(l.p + l.n * (self.h - self.lift_mm(&l)))
+    }
+
+    /// With exact facets, how much higher than planned a ball whose contact is `l` rides: placed
+    /// along the interpolated normal n it dips into the facet (and, at a concave edge, its
+    /// neighbour) whose normal is tilted by α from n, and is moved out along n by
+    /// R(1/cos α − 1); the scallop beside it rises by about as much. The first
+    /// [`LIFT_FREE`]·h of it is left to the target's margin, at most [`LIFT_CAP`]·h is planned
+    /// for, and none above [`LIFT_VALLEY`]·h: there the facets form a valley the ball cannot
+    /// reach into, which keeps about the lift whatever the rings (rings spaced for the rest of h
+    /// would crowd the whole band for it).
+    fn lift_mm(&self, l: &Lifted) -> f64 {
+        let Some(h) = self.lift_h else { return 0.0 };
+        facet_lift_mm(l.n, self.lift.surface().face_normals[l.face as usize], self.ball, h)
     }
 
     /// Ball centres of the ring `rho` around angle θ: five centres spanning about ±R along
@@ -1074,6 +1126,29 @@ mod tests {
             }
         }
         best
+    }
+
+    #[test]
+    fn the_planned_facet_lift_is_the_balls_lift_within_its_band() {
+        // A ball of radius R along a normal tilted by α from its facet's is moved out by
+        // R(1/cos α − 1): then it touches the facet's plane.
+        let (r, h) = (3.0, 0.02);
+        let facet = DVec3::Z;
+        for deg in [0.0f64, 2.0, 4.0, 5.0, 5.5, 6.0, 7.0, 10.0, 60.0] {
+            let n = DVec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos());
+            let lift = crate::mesh::ball_lift_mm(n, facet, r);
+            assert!(((r + lift) * n.z - r).abs() < 1e-12, "{deg}°: the lifted ball is not on the plane");
+            let planned = facet_lift_mm(n, facet, r, h);
+            let expected = if lift > LIFT_VALLEY * h { 0.0 } else { (lift - LIFT_FREE * h).clamp(0.0, LIFT_CAP * h) };
+            assert!((planned - expected).abs() < 1e-12 * r, "{deg}°: {planned} mm planned, {expected} expected");
+            assert!((0.0..=LIFT_CAP * h).contains(&planned));
+        }
+        // A normal facing away from the facet (a fold) is a valley too: nothing planned.
+        assert_eq!(facet_lift_mm(-DVec3::Z, facet, r, h), 0.0);
+        // 2° lifts 1.8 µm (< 0.1 h: left to the margin); 5° lifts 11.5 µm: planned.
+        let tilted = |deg: f64| DVec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos());
+        assert_eq!(facet_lift_mm(tilted(2.0), facet, r, h), 0.0);
+        assert!(facet_lift_mm(tilted(5.0), facet, r, h) > 0.4 * h);
     }
 
     #[test]

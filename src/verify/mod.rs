@@ -24,7 +24,10 @@
 //! per-cell maximum scallop over a 3D grid of cells), gouges, uncovered samples, CT² = Σ CT² ·
 //! (area per sample) and max CT, retractions (passes − 1), and the scallop at every surface
 //! vertex for the page's heat map. [`path_metrics`] gives the path's own figures: length, turning
-//! angles, seed 003's smoothness ρ² (eq. 33), time at a feed.
+//! angles, seed 003's smoothness ρ² (eq. 33), time at a feed. With exact facets, the faces
+//! where the ball riding the facets lifts off them by more than a given height (facet valleys,
+//! [`VerifyOptions::valley_lift_mm`]) are reported apart: their area, and the largest scallop
+//! outside them.
 //!
 //! # Preconditions
 //! A surface from [`crate::mesh`] (unit vertex normals towards the tool, face areas); finite ball
@@ -66,6 +69,12 @@ pub struct VerifyOptions {
     /// A sample whose normal meets no ball within this height is uncovered, mm; `None` = R.
     /// Must be > 0.
     pub max_scallop_search_mm: Option<f64>,
+    /// With exact facets: a face is a *facet valley* when a ball of radius R placed along one
+    /// of its corner normals must move out along it by more than this to clear the face's plane
+    /// (R(1/cos α − 1), α the corner normal's tilt from the face's): where facets meet in such a
+    /// valley, about that much is left whatever the path. Their area and the largest scallop
+    /// elsewhere are reported apart. `None` (default): no face is. Must be finite and ≥ 0.
+    pub valley_lift_mm: Option<f64>,
 }
 
 impl Default for VerifyOptions {
@@ -78,6 +87,7 @@ impl Default for VerifyOptions {
             cell_mm: None,
             gouge_tolerance_mm: 1e-4,
             max_scallop_search_mm: None,
+            valley_lift_mm: None,
         }
     }
 }
@@ -104,6 +114,10 @@ pub struct Verification {
     pub gouges: usize,
     /// Deepest gouge, mm (0 when `gouges` = 0).
     pub max_gouge_mm: f64,
+    /// Area of the facet valleys (see [`VerifyOptions::valley_lift_mm`]), mm².
+    pub valley_area_mm2: f64,
+    /// Largest scallop over the covered samples outside the facet valleys, mm (0 when none).
+    pub max_scallop_outside_valleys_mm: f64,
     /// Seed 003 eq. 34: Σ CT² · (area per sample), mm².
     pub ct2: f64,
     pub max_ct: u32,
@@ -250,6 +264,11 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
     if !(tol.is_finite() && tol >= 0.0 && tol < r) {
         return bad(format!("gouge_tolerance_mm must be ≥ 0 and below the ball radius {r}, got {tol}"));
     }
+    if let Some(lift) = o.valley_lift_mm {
+        if !(lift.is_finite() && lift >= 0.0) {
+            return bad(format!("valley_lift_mm must be finite and ≥ 0, got {lift}"));
+        }
+    }
     let search = o.max_scallop_search_mm.unwrap_or(r);
     if !(search.is_finite() && search > 0.0) {
         return bad(format!("max_scallop_search_mm must be finite and > 0, got {search}"));
@@ -261,6 +280,8 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
 /// `surface`: see the module docs for what is measured.
 pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions) -> Result<Verification, VerifyError> {
     let (r, h, cell, search) = check_options(options)?;
+    check_surface(surface)?; // before the valleys index its faces
+    let valleys = options.valley_lift_mm.map(|lift| facet_valleys(surface, r, lift));
     // Independent: the samples come from the surface alone.
     let (samples, volume) =
         crate::par::join(|| sample_surface(surface, options.samples, options.seed), || SweptVolume::new(passes, r));
@@ -269,11 +290,26 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     // The figures of the samples (sequential: sums and sorts) beside the probes of the vertices.
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
     let (figures, vertex_probes) = crate::par::join(
-        || sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm),
+        || sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref()),
         || probe_all(&volume, surface.positions.len(), vertex, h, search),
     );
-    let SampleFigures { scallops, mean, uncovered, gouges, max_gouge, ct_sum, ct2_sum, max_ct, v_max, v_cells, worst } =
-        figures;
+    let SampleFigures {
+        scallops,
+        mean,
+        uncovered,
+        gouges,
+        max_gouge,
+        ct_sum,
+        ct2_sum,
+        max_ct,
+        v_max,
+        v_cells,
+        worst,
+        max_outside_valleys,
+    } = figures;
+    let valley_area_mm2 = valleys.map_or(0.0, |v| {
+        v.iter().zip(&surface.face_areas).filter(|(&valley, _)| valley).fold(0.0, |sum, (_, a)| sum + a)
+    });
     let n = samples.len();
     let vertex_scallop_mm = vertex_probes.iter().map(|p| p.scallop.unwrap_or(search)).collect();
     let vertex_uncovered = vertex_probes.iter().map(|p| p.scallop.is_none()).collect();
@@ -290,6 +326,8 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
         uncovered_fraction: uncovered as f64 / n as f64,
         gouges,
         max_gouge_mm: max_gouge,
+        valley_area_mm2,
+        max_scallop_outside_valleys_mm: max_outside_valleys,
         ct2: ct2_sum as f64 * area_per_sample,
         max_ct,
         mean_ct: ct_sum as f64 / n as f64,
@@ -314,6 +352,7 @@ struct SampleFigures {
     v_max: f64,
     v_cells: usize,
     worst: Option<(f64, DVec3)>,
+    max_outside_valleys: f64,
 }
 
 fn sample_figures(
@@ -322,7 +361,9 @@ fn sample_figures(
     probes: &[Probe],
     cell: f64,
     gouge_tolerance_mm: f64,
+    valleys: Option<&[bool]>,
 ) -> SampleFigures {
+    let mut max_outside_valleys = 0.0f64;
     let mut scallops = Vec::with_capacity(samples.len());
     let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
     let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
@@ -340,6 +381,9 @@ fn sample_figures(
         max_ct = max_ct.max(ct);
         if let Some(t) = probe.scallop {
             scallops.push(t);
+            if !valleys.is_some_and(|v| v[s.face as usize]) {
+                max_outside_valleys = max_outside_valleys.max(t);
+            }
             let key = ((s.position - origin) / cell).floor();
             cells.push(([key.x as i64, key.y as i64, key.z as i64], t));
             if !matches!(worst, Some((w, _)) if w >= t) {
@@ -351,7 +395,26 @@ fn sample_figures(
     let mean = if scallops.is_empty() { 0.0 } else { scallops.iter().sum::<f64>() / scallops.len() as f64 };
     scallops.sort_unstable_by(f64::total_cmp);
     let (v_max, v_cells) = max_variance(cells);
-    SampleFigures { scallops, mean, uncovered, gouges, max_gouge, ct_sum, ct2_sum, max_ct, v_max, v_cells, worst }
+    SampleFigures {
+        scallops,
+        mean,
+        uncovered,
+        gouges,
+        max_gouge,
+        ct_sum,
+        ct2_sum,
+        max_ct,
+        v_max,
+        v_cells,
+        worst,
+        max_outside_valleys,
+    }
+}
+
+/// Per face, whether it is a facet valley (see [`VerifyOptions::valley_lift_mm`]) for a ball of
+/// radius `r`.
+pub fn facet_valleys(surface: &Surface, r: f64, lift_mm: f64) -> Vec<bool> {
+    (0..surface.triangles.len()).map(|f| surface.face_lift_mm(f, r) > lift_mm).collect()
 }
 
 /// Probes the `n` points `at(i)` (position, normal), in index order.

@@ -121,6 +121,9 @@ export interface PlanReport {
     v_max_mm2: number;
     uncovered_fraction: number;
     gouges: number;
+    /** Faces where a ball riding the facets lifts more than 0.75 h (exact facets), mm². */
+    valley_area_mm2: number;
+    max_scallop_outside_valleys_mm: number;
     ct2: number;
     max_ct: number;
   };

@@ -29,6 +29,13 @@ function rows(plan: PlanResult, limit: number): Row[] {
     ["metric-uncovered", "Uncovered", `${n3.format(100 * verify.uncovered_fraction)} % of samples`, verify.uncovered_fraction > 0],
     ["metric-gouges", "Gouges", n0.format(verify.gouges), verify.gouges > 0],
     [
+      "metric-valleys",
+      "Facet valleys (ball rides > 0.75 h up)",
+      // There about the lift stays whatever the path: the scallop promise holds elsewhere.
+      `${n3.format(verify.valley_area_mm2)} mm²; max scallop elsewhere ${mm(verify.max_scallop_outside_valleys_mm)}`,
+      verify.valley_area_mm2 > 0,
+    ],
+    [
       "metric-clearance",
       "Ball lifted off facets",
       `${n0.format(path.clearance.moved)} centres, up to ${mm(path.clearance.max_move_mm)}`,
