@@ -43,7 +43,8 @@
 //! polygonal sag of a slit radius (so a ring never runs through a slit), every meridian
 //! cusp tested at most R from a ball centre on S^{h·target_fraction}, and every gate point of a
 //! band cut at 0.95 h, but in the bands counted by `gate_compromises` (and the last band of a
-//! disk map, closed by the ball at the pole).
+//! disk map, closed by the ball at the pole); with exact facets, both heights less the lift
+//! planned at the point.
 
 // `!(x > y)` is deliberate: NaN must fail every progress test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
