@@ -485,6 +485,19 @@ impl SparseCholesky {
         Self::build(n, triplets, Some(order))
     }
 
+    /// The cotan Laplacian of the edge `weights` on the unknowns `unknown` (see
+    /// [`cotan_laplacian_triplets`]; `n` of them), factorised in the order `vertex_order`
+    /// induces on them ([`restrict_order`]).
+    pub fn laplacian(
+        weights: &[(u32, u32, f64)],
+        unknown: &[Option<usize>],
+        n: usize,
+        vertex_order: &[u32],
+    ) -> Result<Self, LinalgError> {
+        let triplets = cotan_laplacian_triplets(weights, Some(unknown));
+        Self::with_order(n, &triplets, &restrict_order(vertex_order, unknown, n))
+    }
+
     fn build(n: usize, triplets: &[(usize, usize, f64)], order: Option<&[u32]>) -> Result<Self, LinalgError> {
         if n == 0 {
             return Err(LinalgError::Empty);

@@ -123,9 +123,10 @@ pub enum PlanError {
 }
 
 /// Stage timings, milliseconds. `flatten` includes the rim refinement before it; `slitmap`
-/// ends when the facet tree and the crease-split surface built beside both are done (on wasm, after them). `post` and
-/// `verify` run side by side (natively): `verify` is the span from their common start to the
-/// verifier's end, and `total` (the wall time of every stage) counts that span once.
+/// ends when the facet tree and the crease-split surface built beside both are done (on wasm,
+/// after them). `post` and `verify` run side by side (natively): `verify` is the span from their
+/// common start to the verifier's end, and `total` (the wall time of every stage) counts that
+/// span once.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Timings {
     pub read: f64,

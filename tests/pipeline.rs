@@ -17,6 +17,21 @@ fn planner(name: &str) -> Planner {
     Planner::new(out, &|| 0.0).expect("planner")
 }
 
+/// The planner of a shared mesh and the diagonal of its bounding box (mm); `None`, with a note,
+/// when the mesh is absent.
+fn shared_planner(name: &str) -> Option<(Planner, f64)> {
+    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
+        eprintln!("skipped: {name} is absent");
+        return None;
+    };
+    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
+    let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
+    Some((Planner::new(out, &|| 0.0).expect("planner"), (hi - lo).length()))
+}
+
+/// 5-axis, for the walls of the shared meshes at their own scale.
+const FIVE_AXIS: slitpath::toolpath::Axes = slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 };
+
 fn plan(p: &Planner, options: &PlanOptions) -> Plan {
     p.plan(options, &mut |_, _, _| {}, &|| 0.0).expect("plan")
 }
@@ -266,22 +281,17 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // scale left 1.95 h (wavy) and 8.7 h (face) at the creases, so they are planned as smooth
     // surfaces. (Smooth, the ball dips into face_holes' coarse facets by up to 11.6 µm = 16 h.)
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
-        let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
-            eprintln!("skipped: {name} is absent");
-            continue;
-        };
-        let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
-        let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
-        let r = (hi - lo).length() / 60.0;
+        let Some((p, diagonal)) = shared_planner(name) else { continue };
+        let r = diagonal / 60.0;
         let options = PlanOptions {
             radius_mm: r,
             scallop_mm: r / 150.0,
-            axes: slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 },
+            axes: FIVE_AXIS,
             post: Post::Cl,
             facets: Facets::Smooth,
             ..PlanOptions::default()
         };
-        assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
+        assert_scallop_kept(name, &p, &options);
     }
 }
 
@@ -292,26 +302,17 @@ fn issue_4_the_gate_closes_the_gaps_between_meridians() {
     // its plate overlaps itself below a slit, and at the kinks of rings crossing its long
     // facets) and beetle 1.29 h; the spacing's gate now tests the bands' points between them.
     for (name, axes) in [("plate_holes.stl", 3), ("beetle.stl", 5)] {
-        let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
-            eprintln!("skipped: {name} is absent");
-            continue;
-        };
-        let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
-        let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
-        let r = ((hi - lo).length() / 60.0).min(3.0);
+        let Some((p, diagonal)) = shared_planner(name) else { continue };
+        let r = (diagonal / 60.0).min(3.0);
         let options = PlanOptions {
             radius_mm: r,
             scallop_mm: (r / 150.0).min(0.02),
-            axes: if axes == 5 {
-                slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 }
-            } else {
-                Default::default()
-            },
+            axes: if axes == 5 { FIVE_AXIS } else { Default::default() },
             post: Post::Cl,
             facets: Facets::Smooth,
             ..PlanOptions::default()
         };
-        assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
+        assert_scallop_kept(name, &p, &options);
     }
 }
 
@@ -369,21 +370,10 @@ fn issue_4_exact_facets_keep_the_scallop_outside_the_facet_valleys() {
     // less. The verifier reports those faces apart; elsewhere the spacing keeps h (1.36 h before
     // it planned for the lifts).
     let name = "wavy_mesh_with_hole.stl";
-    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
-        eprintln!("skipped: {name} is absent");
-        return;
-    };
-    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
-    let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
-    let r = (hi - lo).length() / 60.0;
-    let options = PlanOptions {
-        radius_mm: r,
-        scallop_mm: r / 150.0,
-        axes: slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 },
-        post: Post::Cl,
-        ..PlanOptions::default()
-    };
-    let p = Planner::new(out, &|| 0.0).expect("planner");
+    let Some((p, diagonal)) = shared_planner(name) else { return };
+    let r = diagonal / 60.0;
+    let options =
+        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
     let pl = plan(&p, &options);
     let v = pl.verification().expect("verified");
     let h = options.scallop_mm;
@@ -406,13 +396,8 @@ fn issue_4_exact_facets_plan_for_the_balls_lift_off_curved_facets() {
     // from the facets at their edges: the clearance lifts the balls there by up to 0.69 h, and
     // the scallop beside them rose to 1.36 h while the spacing planned for balls on the facets.
     let name = "plate_holes.stl";
-    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join(name)) else {
-        eprintln!("skipped: {name} is absent");
-        return;
-    };
-    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
-    let options = PlanOptions { post: Post::Cl, ..PlanOptions::default() };
-    assert_scallop_kept(name, &Planner::new(out, &|| 0.0).expect("planner"), &options);
+    let Some((p, _)) = shared_planner(name) else { return };
+    assert_scallop_kept(name, &p, &PlanOptions { post: Post::Cl, ..PlanOptions::default() });
 }
 
 #[test]
@@ -431,14 +416,8 @@ fn issue_3_auto_plans_plate_holes_from_the_next_pole_when_the_best_one_cannot_ca
     // plate_holes' flat face is remeshed (it has needles); the best pole by E_min then lies next
     // to a hole, where the P1 map's images overlap and the spiral jumps 4 mm. `auto` must still
     // give a path, from the next best pole, and say which pole it gave up and why.
-    let Ok(bytes) = std::fs::read(common::shared_mesh_dir().join("plate_holes.stl")) else {
-        eprintln!("skipped: plate_holes.stl is absent");
-        return;
-    };
-    let out = mesh::load(&bytes, &mesh::MeshOptions::default()).expect("mesh");
-    let (lo, hi) = mesh::weld::bounding_box(&out.surface.positions);
-    let r = (hi - lo).length() / 60.0;
-    let p = Planner::new(out, &|| 0.0).expect("planner");
+    let Some((p, diagonal)) = shared_planner("plate_holes.stl") else { return };
+    let r = diagonal / 60.0;
     let options = PlanOptions { radius_mm: r, scallop_mm: r / 150.0, verify_samples: 20_000, ..PlanOptions::default() };
     let pl = plan(&p, &options);
     let rejected = &pl.report.origin.rejected;

@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 
 use super::{check, quality, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenOptions, Flattening};
-use crate::linalg::{cotan_laplacian_triplets, cotan_weights, mesh_order, restrict_order, SparseCholesky};
+use crate::linalg::{cotan_weights, mesh_order, SparseCholesky};
 use crate::num;
 
 const NONE: u32 = u32::MAX;
@@ -137,9 +137,7 @@ impl BffSolver {
                 if interior.is_empty() {
                     return Ok(None);
                 }
-                let trip = cotan_laplacian_triplets(&weights, Some(&interior_unknown));
-                let sub = restrict_order(&order, &interior_unknown, interior.len());
-                SparseCholesky::with_order(interior.len(), &trip, &sub).map(Some)
+                SparseCholesky::laplacian(&weights, &interior_unknown, interior.len(), &order).map(Some)
             },
             || {
                 // Always built: the conjugate, the disk target and prescribed angles all need it.
@@ -151,8 +149,7 @@ impl BffSolver {
                         std::cmp::Ordering::Greater => Some(v - 1),
                     })
                     .collect();
-                let trip = cotan_laplacian_triplets(&weights, Some(&unknown));
-                SparseCholesky::with_order(n_all - 1, &trip, &restrict_order(&order, &unknown, n_all - 1))
+                SparseCholesky::laplacian(&weights, &unknown, n_all - 1, &order)
             },
         );
         let (aii, neumann) = (aii?, neumann?);

@@ -99,9 +99,7 @@ mod untangle;
 pub(crate) use inverse::{barycentric, clamp_barycentric};
 pub use inverse::{InverseMap, Location};
 
-use crate::linalg::{
-    cotan_laplacian_triplets, cotan_weights_2d, mesh_order, restrict_order, LinalgError, SparseCholesky,
-};
+use crate::linalg::{cotan_weights_2d, mesh_order, LinalgError, SparseCholesky};
 use crate::num;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
@@ -550,15 +548,13 @@ impl SlitMapSolver {
                     // type stays simple; it is never used with a non-empty right-hand side.
                     return SparseCholesky::new(1, &[(0, 0, 1.0)]);
                 }
-                let trip = cotan_laplacian_triplets(&weights, Some(&h_unknown));
-                SparseCholesky::with_order(n_h, &trip, &restrict_order(&order, &h_unknown, n_h))
+                SparseCholesky::laplacian(&weights, &h_unknown, n_h, &order)
             },
             || {
                 if n_theta == 0 {
                     return SparseCholesky::new(1, &[(0, 0, 1.0)]);
                 }
-                let trip = cotan_laplacian_triplets(&weights, Some(&theta_unknown));
-                SparseCholesky::with_order(n_theta, &trip, &restrict_order(&order, &theta_unknown, n_theta))
+                SparseCholesky::laplacian(&weights, &theta_unknown, n_theta, &order)
             },
         );
         let (h_chol, theta_chol) = (h_chol?, theta_chol?);

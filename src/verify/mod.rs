@@ -289,24 +289,10 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
     // The figures of the samples (sequential: sums and sorts) beside the probes of the vertices.
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
-    let (figures, vertex_probes) = crate::par::join(
+    let (f, vertex_probes) = crate::par::join(
         || sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref()),
         || probe_all(&volume, surface.positions.len(), vertex, h, search),
     );
-    let SampleFigures {
-        scallops,
-        mean,
-        uncovered,
-        gouges,
-        max_gouge,
-        ct_sum,
-        ct2_sum,
-        max_ct,
-        v_max,
-        v_cells,
-        worst,
-        max_outside_valleys,
-    } = figures;
     let valley_area_mm2 = valleys.map_or(0.0, |v| {
         v.iter().zip(&surface.face_areas).filter(|(&valley, _)| valley).fold(0.0, |sum, (_, a)| sum + a)
     });
@@ -316,26 +302,26 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let area_per_sample = surface.area() / n as f64;
     Ok(Verification {
         samples: n,
-        max_scallop_mm: scallops.last().copied().unwrap_or(0.0),
-        mean_scallop_mm: mean,
-        p95_scallop_mm: percentile(&scallops, 0.95),
-        p99_scallop_mm: percentile(&scallops, 0.99),
-        v_max_mm2: v_max,
-        v_max_cells: v_cells,
-        uncovered_samples: uncovered,
-        uncovered_fraction: uncovered as f64 / n as f64,
-        gouges,
-        max_gouge_mm: max_gouge,
+        max_scallop_mm: f.scallops.last().copied().unwrap_or(0.0),
+        mean_scallop_mm: f.mean,
+        p95_scallop_mm: percentile(&f.scallops, 0.95),
+        p99_scallop_mm: percentile(&f.scallops, 0.99),
+        v_max_mm2: f.v_max,
+        v_max_cells: f.v_cells,
+        uncovered_samples: f.uncovered,
+        uncovered_fraction: f.uncovered as f64 / n as f64,
+        gouges: f.gouges,
+        max_gouge_mm: f.max_gouge,
         valley_area_mm2,
-        max_scallop_outside_valleys_mm: max_outside_valleys,
-        ct2: ct2_sum as f64 * area_per_sample,
-        max_ct,
-        mean_ct: ct_sum as f64 / n as f64,
+        max_scallop_outside_valleys_mm: f.max_outside_valleys,
+        ct2: f.ct2_sum as f64 * area_per_sample,
+        max_ct: f.max_ct,
+        mean_ct: f.ct_sum as f64 / n as f64,
         retractions: passes.len() - 1,
         segments: volume.segments(),
         vertex_scallop_mm,
         vertex_uncovered,
-        worst_sample: worst.map(|(_, p)| p.to_array()),
+        worst_sample: f.worst.map(|(_, p)| p.to_array()),
     })
 }
 
