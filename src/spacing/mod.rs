@@ -200,6 +200,9 @@ fn offsets_at(all: &[f64], hi: f64, rho: f64) -> impl Iterator<Item = f64> + '_ 
 /// parabola through each half computed once: a chain is measured against many points.
 #[derive(Debug, Clone, Copy)]
 struct Chain {
+    /// The contact of the middle centre (on the meridian itself): the band's point of S^h at
+    /// this ring is taken from it, not lifted again.
+    contact: Lifted,
     centres: [DVec3; 5],
     /// Per half (centres 0–2, then 2–4): u and v of P(t) = a + t·u + t²·v through its three
     /// centres at t = 0, 1, 2, and whether it turns sharply (see [`Chain::distance`]).
@@ -472,9 +475,15 @@ impl<'a> Spacer<'a> {
         let mut last_step: Option<f64> = None;
         // Ring k's ball-centre polyline, for the gate of the band below it.
         let mut upper: Option<gate::RingLine> = None;
+        // The band below a ring, made beside its gate (see below).
+        let mut ahead: Option<(f64, BandMade)> = None;
         loop {
             let hi = rings.last().map_or(1.0, |r| r.radius);
-            let (mut band, hi_length) = self.band(hi, rings.is_empty(), last_step, true)?;
+            let (mut band, hi_length) = match ahead.take() {
+                Some((radius, made)) if radius == hi => made?,
+                _ => self.band(hi, rings.is_empty(), last_step, true)?,
+            };
+            self.meridians += band.thetas.len();
             if let Some(last) = rings.last_mut() {
                 last.length_mm = hi_length;
             }
@@ -495,12 +504,25 @@ impl<'a> Spacer<'a> {
                 // crease meridians.
                 self.crease_compromises += 1;
                 band = self.band(hi, rings.is_empty(), last_step, false)?.0;
+                self.meridians += band.thetas.len();
                 radius = self.next_radius(&mut band, last_step)?;
             }
             if !(hi - radius > 1e-12) {
                 return Err(SpacingError::NoProgress { ring: rings.len() + 1, radius: hi });
             }
-            let (radius, centres) = self.gated(hi, radius, upper.as_ref())?;
+            // Most rings pass their gate where the meridians put them: with threads, the band
+            // below is made beside the gate's first test (the two are small parallel jobs that
+            // leave threads idle on their own), and kept when the ring stays there.
+            let test = || self.gate_test(hi, radius, upper.as_ref(), self.centres(radius, None)?);
+            let (first, below) = if crate::par::threads() > 1 {
+                let (first, below) = crate::par::join(test, || self.band(radius, false, Some(hi - radius), true));
+                (first?, Some(below))
+            } else {
+                (test()?, None)
+            };
+            let (gated, centres) = self.gated(hi, radius, upper.as_ref(), first)?;
+            ahead = below.filter(|_| gated == radius).map(|below| (radius, below));
+            let radius = gated;
             upper = Some(centres);
             last_step = Some(hi - radius);
             rings.push(Ring { radius, length_mm: 0.0 });
@@ -592,24 +614,22 @@ impl<'a> Spacer<'a> {
 
     /// The final gate of a ring the meridians admitted at `lo` below ring `hi` (centres
     /// `upper`; `None` for the first ring): the band's gate points ([`gate`]) must be cut at the
-    /// user's h·[`GATE_FRACTION`]. While some are not, the ring moves up, by bisection on those
-    /// points between its place and the lowest |w| among them (where the ring runs through that
-    /// point, unless the P1 image overlaps itself there), and the band is gated again, at most
-    /// [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
+    /// user's h·[`GATE_FRACTION`]; `first` is the ring's polyline at `lo` and the points it
+    /// leaves uncut ([`Spacer::gate_test`]). While some are not cut, the ring moves up, by
+    /// bisection on those points between its place and the lowest |w| among them (where the ring
+    /// runs through that point, unless the P1 image overlaps itself there), and the band is
+    /// gated again, at most [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
     fn gated(
         &mut self,
         hi: f64,
         lo: f64,
         upper: Option<&gate::RingLine>,
+        first: (gate::RingLine, Vec<gate::GatePoint>),
     ) -> Result<(f64, gate::RingLine), SpacingError> {
         let (r, h) = (self.ball, self.options.scallop_mm * GATE_FRACTION);
-        fn rings<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
-            upper.into_iter().chain([lower]).collect()
-        }
         let mut lo = lo;
-        let mut lower = self.centres(lo, None)?;
-        for _ in 0..GATE_ROUNDS {
-            let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&rings(upper, &lower), r, h));
+        let (mut lower, mut bad) = first;
+        for round in 1.. {
             if bad.is_empty() {
                 return Ok((lo, lower));
             }
@@ -628,9 +648,27 @@ impl<'a> Spacer<'a> {
             }
             lo = self.clear_of_slits(ok, hi);
             lower = self.centres(lo, None)?;
+            if round == GATE_ROUNDS {
+                break;
+            }
+            (lower, bad) = self.gate_test(hi, lo, upper, lower)?;
         }
         self.gate_compromises += 1;
         Ok((lo, lower))
+    }
+
+    /// The ring `lo`'s centres `lower` and the gate points of the band below ring `hi` (centres
+    /// `upper`) that the two leave uncut at the user's h·[`GATE_FRACTION`].
+    fn gate_test(
+        &self,
+        hi: f64,
+        lo: f64,
+        upper: Option<&gate::RingLine>,
+        lower: gate::RingLine,
+    ) -> Result<(gate::RingLine, Vec<gate::GatePoint>), SpacingError> {
+        let h = self.options.scallop_mm * GATE_FRACTION;
+        let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&rings(upper, &lower), self.ball, h));
+        Ok((lower, bad))
     }
 
     /// `rho` moved up out of a slit's sag or a fold, unless that reaches ring `hi`.
@@ -727,12 +765,12 @@ impl<'a> Spacer<'a> {
     /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip, outer
     /// corner and crease crossing) and ring k's centre chains on them; also the ring's length.
     fn band(
-        &mut self,
+        &self,
         hi: f64,
         first: bool,
         last_step: Option<f64>,
         with_creases: bool,
-    ) -> Result<(Band, f64), SpacingError> {
+    ) -> BandMade {
         let (length, cumulative) = self.ring_length(hi)?;
         let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
         let mut thetas: Vec<f64> = Vec::with_capacity(n + 6 * self.slits.len());
@@ -791,7 +829,6 @@ impl<'a> Spacer<'a> {
         thetas.extend_from_slice(&on_crease);
         thetas.sort_by(f64::total_cmp);
         thetas.dedup();
-        self.meridians += thetas.len();
         let upper = if first { None } else { Some(crate::par::try_map(thetas.len(), |i| self.chain(hi, thetas[i]))?) };
         // Near a slit tip the meridians bend around the end of the hole on the surface, and across
         // a crease the scallop has a kink, so the distances along them need not be monotone:
@@ -842,8 +879,12 @@ impl<'a> Spacer<'a> {
     /// Point of S^h on the meridian θ at radius s, lowered by the ball's expected lift there
     /// ([`Spacer::lift_mm`]).
     fn q(&self, s: f64, theta: f64) -> Result<DVec3, SpacingError> {
-        let l = self.point(s, theta)?;
-        Ok(l.p + l.n * (self.h - self.lift_mm(&l)))
+        Ok(self.q_at(&self.point(s, theta)?))
+    }
+
+    /// Point of S^h over the contact `l`, lowered as in [`Spacer::q`].
+    fn q_at(&self, l: &Lifted) -> DVec3 {
+        l.p + l.n * (self.h - self.lift_mm(l))
     }
 
     /// With exact facets, how much higher than planned a ball whose contact is `l` rides: placed
@@ -866,20 +907,18 @@ impl<'a> Spacer<'a> {
             let l = self.point(rho, t)?;
             Ok(l.p + l.n * self.ball)
         };
-        let c0 = centre(theta)?;
+        let contact = self.point(rho, theta)?;
+        let c0 = contact.p + contact.n * self.ball;
         let probe = 1e-4;
         let speed = (centre(theta + probe)? - c0).length() / probe;
         if !(speed > 1e-9) {
-            return Ok(Chain::new([c0; 5])); // the pole: every angle is the same point
+            return Ok(Chain::new(contact, [c0; 5])); // the pole: every angle is the same point
         }
         let dt = (0.5 * self.ball / speed).min(0.4);
-        Ok(Chain::new([
-            centre(theta - 2.0 * dt)?,
-            centre(theta - dt)?,
-            c0,
-            centre(theta + dt)?,
-            centre(theta + 2.0 * dt)?,
-        ]))
+        Ok(Chain::new(
+            contact,
+            [centre(theta - 2.0 * dt)?, centre(theta - dt)?, c0, centre(theta + dt)?, centre(theta + 2.0 * dt)?],
+        ))
     }
 
     /// Whether a ring at `rho` (with ring k at `band.hi` above it, or the boundary) leaves every
@@ -991,12 +1030,13 @@ impl<'a> Spacer<'a> {
     /// equal (regula falsi, Illinois variant); cut when that distance is at most R.
     fn cusp_ok(&self, upper: &Chain, lower: &Chain, lo: f64, hi: f64, theta: f64) -> Result<bool, SpacingError> {
         let r = self.ball;
-        let qa = self.q(lo, theta)?;
+        // The band's ends are the chains' own contacts (lifted at `lo` and `hi` on θ).
+        let qa = self.q_at(&lower.contact);
         let (du_a, dl_a) = (upper.distance(qa), lower.distance(qa));
         if du_a <= r {
             return Ok(true);
         }
-        let qb = self.q(hi, theta)?;
+        let qb = self.q_at(&upper.contact);
         let (du_b, dl_b) = (upper.distance(qb), lower.distance(qb));
         if dl_b <= r {
             return Ok(true);
@@ -1040,15 +1080,23 @@ impl<'a> Spacer<'a> {
     }
 }
 
+/// What [`Spacer::band`] returns: the band and the length of its upper ring, mm.
+type BandMade = Result<(Band, f64), SpacingError>;
+
+/// Ring k's centres (none above the first ring) and the ring below.
+fn rings<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
+    upper.into_iter().chain([lower]).collect()
+}
+
 impl Chain {
-    fn new(centres: [DVec3; 5]) -> Self {
+    fn new(contact: Lifted, centres: [DVec3; 5]) -> Self {
         let half = |a: DVec3, b: DVec3, c: DVec3| {
             let v = (a - 2.0 * b + c) * 0.5;
             let (ab, bc) = (b - a, c - b);
             (b - a - v, v, !(ab.dot(bc) >= SHARP_TURN_COS * ab.length() * bc.length()))
         };
         let c = centres;
-        Self { centres, halves: [half(c[0], c[1], c[2]), half(c[2], c[3], c[4])] }
+        Self { contact, centres, halves: [half(c[0], c[1], c[2]), half(c[2], c[3], c[4])] }
     }
 
     /// Distance from `q` to the centre curve the chain samples: the parabola through each half.
@@ -1163,7 +1211,8 @@ mod tests {
                 DVec3::new(radius * a.sin(), radius * (1.0 - a.cos()), 0.0)
             });
             for q in [DVec3::new(0.3, 2.0, 0.5), DVec3::new(-1.1, -1.5, 0.2), DVec3::new(2.5, 0.4, -1.0)] {
-                let d = Chain::new(c).distance(q);
+                let contact = Lifted { rho: 0.5, theta: 0.0, p: c[2] - DVec3::Z, n: DVec3::Z, face: 0 };
+                let d = Chain::new(contact, c).distance(q);
                 let poly = (0..4).map(|k| segment_dist2(q, c[k], c[k + 1])).fold(f64::INFINITY, f64::min).sqrt();
                 let want = if radius < 10.0 { oracle(q, &c).max(poly) } else { oracle(q, &c) };
                 assert!((d - want).abs() < 1e-6, "radius {radius}, q {q}: {d} vs {want}");
