@@ -17,7 +17,7 @@ use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
 use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
 use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
-use crate::spacing::{self, Lift, Rings, SpacingError, SpacingOptions};
+use crate::spacing::{Lift, Rings, SpacingError, SpacingIndex, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
 use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
@@ -253,7 +253,8 @@ impl Planner {
         stage(0);
         let t = now();
         let origin_options = OriginOptions { radius_mm: r, choice: options.origin, ..OriginOptions::default() };
-        let mut origin = origin::find_origin(&self.surface, &self.domain, &self.solver, &origin_options)?;
+        let (mut origin, mut map) =
+            origin::find_origin_and_map(&self.surface, &self.domain, &self.solver, &origin_options)?;
         timings.origin = now() - t;
         let spiral_options = SpiralOptions {
             direction: options.direction,
@@ -272,7 +273,7 @@ impl Planner {
         .into_iter();
         let mut rejected = Vec::new();
         let (map, rings, spiral) = loop {
-            match self.rings_and_spiral(&origin, options, &spiral_options, &mut stage, &mut timings, now) {
+            match self.rings_and_spiral(map, options, &spiral_options, &mut stage, &mut timings, now) {
                 Ok(done) => break done,
                 Err(e) if e.depends_on_pole() => {
                     let Some(pole) = alternatives.next() else { return Err(e) };
@@ -283,12 +284,13 @@ impl Planner {
                     });
                     let t = now();
                     let choice = OriginChoice::Plane(pole);
-                    let next = origin::find_origin(
+                    let (next, next_map) = origin::find_origin_and_map(
                         &self.surface,
                         &self.domain,
                         &self.solver,
                         &OriginOptions { choice, ..origin_options.clone() },
                     )?;
+                    map = next_map;
                     let trace = std::mem::take(&mut origin.trace);
                     origin = Origin { evaluations: origin.evaluations + next.evaluations, trace, ..next };
                     timings.origin += now() - t;
@@ -392,10 +394,10 @@ impl Planner {
         Ok(Plan { origin, map, rings, spiral, toolpath, path, gcode, report })
     }
 
-    /// The slit map of `origin`'s pole, its rings and the spiral through them.
+    /// The rings of the pole's slit map `map` and the spiral through them (the map handed back).
     fn rings_and_spiral(
         &self,
-        origin: &Origin,
+        map: SlitMap,
         options: &PlanOptions,
         spiral_options: &SpiralOptions,
         stage: &mut dyn FnMut(usize),
@@ -404,17 +406,21 @@ impl Planner {
     ) -> Result<(SlitMap, Rings, Spiral), PlanError> {
         stage(1);
         let t = now();
-        let map = self.solver.map(origin.pole)?;
         let spacing_options = SpacingOptions {
             radius_mm: options.radius_mm,
             scallop_mm: options.scallop_mm,
             facet_lift: options.facets == Facets::Exact,
             ..SpacingOptions::default()
         };
-        // One inverse map for the spacing and the spiral.
-        let lift = Lift::new(self.riding(options.facets), &map);
-        // The part's facet tree: the crease-split surface has the same positions and triangles.
-        let rings = spacing::spacing_on(&lift, &self.faces, &spacing_options);
+        // One inverse map for the spacing and the spiral, built beside the spacing's indexes of
+        // the map. The part's facet tree serves: the crease-split surface has the same positions
+        // and triangles.
+        let surface = self.riding(options.facets);
+        let (lift, index) = crate::par::join(
+            || Lift::new(surface, &map),
+            || SpacingIndex::new(surface, &map, &self.faces, &spacing_options),
+        );
+        let rings = index.and_then(|index| index.rings(&lift));
         timings.spacing += now() - t;
         let rings = rings?;
         stage(2);

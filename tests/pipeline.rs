@@ -453,6 +453,27 @@ fn spacing_and_spiral_refuse_a_map_of_another_mesh() {
     ));
 }
 
+/// A spacing index built apart from its map's lift (as the planner builds the two side by side)
+/// gives the rings `spacing_on` gives, and refuses the lift of another map.
+#[test]
+fn a_spacing_index_gives_spacing_on_rings_and_refuses_another_maps_lift() {
+    use slitpath::mesh::nearest::FaceTree;
+    use slitpath::spacing::{self, Lift, SpacingError, SpacingIndex, SpacingOptions};
+    let part = planner("plate_3_holes");
+    let planned = plan(&part, &PlanOptions::default());
+    let tree = FaceTree::new(&part.surface.positions, &part.surface.triangles);
+    let options = SpacingOptions::default();
+    let lift = Lift::new(&part.surface, &planned.map);
+    let index = SpacingIndex::new(&part.surface, &planned.map, &tree, &options).expect("index");
+    let rings = index.rings(&lift).expect("rings");
+    assert_eq!(Ok(&rings), spacing::spacing_on(&lift, &tree, &options).as_ref());
+    assert!(rings.rings.len() > 10);
+    let other_map = part.solver.map(slitpath::origin::centroid_pole(&part.domain)).expect("centroid map");
+    let other_lift = Lift::new(&part.surface, &other_map);
+    let index = SpacingIndex::new(&part.surface, &planned.map, &tree, &options).expect("index");
+    assert_eq!(index.rings(&other_lift).map(|r| r.rings.len()), Err(SpacingError::IndexMismatch));
+}
+
 /// `spacing_on` takes the part's facet tree from its caller: one of another mesh is refused.
 #[test]
 fn spacing_refuses_a_facet_tree_of_another_mesh() {

@@ -110,8 +110,13 @@ impl<'a> EnergyEvaluator<'a> {
 
     /// E_min of `pole`: `solver.map(pole)` then [`EnergyEvaluator::evaluate_map`].
     pub fn evaluate(&self, pole: DVec2) -> Result<Energy, OriginError> {
+        Ok(self.evaluate_with_map(pole)?.0)
+    }
+
+    /// [`EnergyEvaluator::evaluate`], and the slit map it was evaluated on.
+    pub fn evaluate_with_map(&self, pole: DVec2) -> Result<(Energy, SlitMap), OriginError> {
         let map = self.solver.map(pole)?;
-        self.evaluate_map(&map)
+        Ok((self.evaluate_map(&map)?, map))
     }
 
     /// E_min of a slit map (seed eq. 18 by the closed form per radius bin): one pass over the

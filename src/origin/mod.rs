@@ -52,7 +52,7 @@ pub use energy::{Energy, EnergyEvaluator};
 pub use locate::{centroid_pole, pole_from_3d, pole_to_3d};
 
 use crate::mesh::Surface;
-use crate::slitmap::{Mode, PlanarDomain, SlitMapError, SlitMapSolver};
+use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapSolver};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
@@ -181,6 +181,17 @@ pub fn find_origin(
     solver: &SlitMapSolver,
     options: &OriginOptions,
 ) -> Result<Origin, OriginError> {
+    Ok(find_origin_and_map(surface, domain, solver, options)?.0)
+}
+
+/// [`find_origin`], and the pole's slit map (`solver.map(origin.pole)`), which the search has
+/// solved already.
+pub fn find_origin_and_map(
+    surface: &Surface,
+    domain: &PlanarDomain,
+    solver: &SlitMapSolver,
+    options: &OriginOptions,
+) -> Result<(Origin, SlitMap), OriginError> {
     check_options(options)?;
     if domain.positions.len() != surface.positions.len() || domain.triangles.len() != surface.triangles.len() {
         return Err(OriginError::SurfaceMismatch {
@@ -195,18 +206,19 @@ pub fn find_origin(
     }
     let ev = EnergyEvaluator::new(surface, solver, options)?;
     let centroid = centroid_pole(domain);
-    let centroid_energy = ev.evaluate(centroid)?;
-    let Picked { pole, energy, evaluations, trace } = match options.choice {
+    let (centroid_energy, centroid_map) = ev.evaluate_with_map(centroid)?;
+    let Picked { pole, energy, map, evaluations, trace } = match options.choice {
         OriginChoice::Auto => {
             let mut s = search::Search::new(&ev, domain, options.max_evaluations, options.tolerance_rel);
-            s.record(centroid, centroid_energy.clone());
+            s.record(centroid, centroid_energy.clone(), centroid_map);
             s.run(centroid, centroid_energy.e_min, options.starts);
-            let (pole, energy) = s.best.ok_or(OriginError::NoFeasiblePole)?;
-            Picked { pole, energy, evaluations: s.evaluations, trace: s.trace }
+            let (pole, energy, map) = s.best.ok_or(OriginError::NoFeasiblePole)?;
+            Picked { pole, energy, map, evaluations: s.evaluations, trace: s.trace }
         }
         OriginChoice::Centroid => Picked {
             pole: centroid,
             energy: centroid_energy.clone(),
+            map: centroid_map,
             evaluations: 1,
             trace: vec![(centroid, centroid_energy.e_min)],
         },
@@ -226,7 +238,7 @@ pub fn find_origin(
         Mode::Disk => None,
         Mode::Annulus { hole, .. } => Some(hole),
     };
-    Ok(Origin {
+    let origin = Origin {
         pole,
         pole_3d: pole_to_3d(surface, domain, pole, hole),
         mode: energy.mode,
@@ -235,20 +247,22 @@ pub fn find_origin(
         centroid_energy,
         evaluations,
         trace,
-    })
+    };
+    Ok((origin, map))
 }
 
 /// An explicit pole: its energy, two evaluations (the centroid's and its own).
 fn single(ev: &EnergyEvaluator, centroid: DVec2, centroid_energy: &Energy, pole: DVec2) -> Result<Picked, OriginError> {
-    let energy = ev.evaluate(pole)?;
+    let (energy, map) = ev.evaluate_with_map(pole)?;
     let trace = vec![(centroid, centroid_energy.e_min), (pole, energy.e_min)];
-    Ok(Picked { pole, energy, evaluations: 2, trace })
+    Ok(Picked { pole, energy, map, evaluations: 2, trace })
 }
 
 /// The pole picked by a choice, before its 3D point is computed.
 struct Picked {
     pole: DVec2,
     energy: Energy,
+    map: SlitMap,
     evaluations: usize,
     trace: Vec<(DVec2, f64)>,
 }

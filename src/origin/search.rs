@@ -5,7 +5,7 @@
 
 use super::energy::{Energy, EnergyEvaluator};
 use super::locate::boundary_distance;
-use crate::slitmap::PlanarDomain;
+use crate::slitmap::{PlanarDomain, SlitMap};
 use glam::DVec2;
 
 /// Initial step length, as a fraction of the domain size.
@@ -43,12 +43,13 @@ pub(crate) struct Search<'s, 'a> {
     tolerance_rel: f64,
     pub evaluations: usize,
     pub trace: Vec<(DVec2, f64)>,
-    pub best: Option<(DVec2, Energy)>,
+    /// The pole with the least E_min so far, its energy and its slit map.
+    pub best: Option<(DVec2, Energy, SlitMap)>,
     /// Best point of each hole's offset curve, once computed (`None` inside: no feasible point).
     offsets: Vec<Option<Option<(DVec2, f64)>>>,
     /// Energies computed ahead, in parallel, of the sequential search asking for them (see
     /// [`Search::prefetch`]).
-    ahead: Vec<(DVec2, Option<Energy>)>,
+    ahead: Vec<(DVec2, Option<(Energy, SlitMap)>)>,
 }
 
 impl<'s, 'a> Search<'s, 'a> {
@@ -86,15 +87,12 @@ impl<'s, 'a> Search<'s, 'a> {
             return None;
         }
         self.evaluations += 1;
-        let energy = match self.ahead.iter().position(|(q, _)| *q == p) {
+        let (energy, map) = match self.ahead.iter().position(|(q, _)| *q == p) {
             Some(k) => self.ahead.swap_remove(k).1,
-            None => self.ev.evaluate(p).ok(),
+            None => self.ev.evaluate_with_map(p).ok(),
         }?;
         let e = energy.e_min;
-        self.trace.push((p, e));
-        if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
-            self.best = Some((p, energy));
-        }
+        self.keep(p, energy, map);
         Some(e)
     }
 
@@ -120,16 +118,21 @@ impl<'s, 'a> Search<'s, 'a> {
             return; // one point gains nothing from a thread
         }
         let ev = self.ev;
-        let energies = crate::par::each(todo.len(), |i| ev.evaluate(todo[i]).ok());
+        let energies = crate::par::each(todo.len(), |i| ev.evaluate_with_map(todo[i]).ok());
         self.ahead.extend(todo.into_iter().zip(energies));
     }
 
-    /// Records an energy evaluated outside the search (the centroid's).
-    pub fn record(&mut self, p: DVec2, energy: Energy) {
+    /// Records an energy and its map evaluated outside the search (the centroid's).
+    pub fn record(&mut self, p: DVec2, energy: Energy, map: SlitMap) {
         self.evaluations += 1;
+        self.keep(p, energy, map);
+    }
+
+    /// Traces an evaluation, and keeps it when it is the best so far.
+    fn keep(&mut self, p: DVec2, energy: Energy, map: SlitMap) {
         self.trace.push((p, energy.e_min));
-        if self.best.as_ref().map_or(true, |(_, b)| energy.better_than(b)) {
-            self.best = Some((p, energy));
+        if self.best.as_ref().map_or(true, |(_, b, _)| energy.better_than(b)) {
+            self.best = Some((p, energy, map));
         }
     }
 
@@ -173,15 +176,14 @@ impl<'s, 'a> Search<'s, 'a> {
         }
         let tris = &self.domain.triangles;
         let stride = tris.len().div_ceil(START_CANDIDATES).max(1);
-        let cands: Vec<(DVec2, f64)> = tris
-            .iter()
-            .step_by(stride)
-            .map(|t| {
-                let c = t.iter().map(|&v| self.domain.positions[v as usize]).sum::<DVec2>() / 3.0;
-                (c, boundary_distance(self.domain, c))
-            })
-            .filter(|&(_, d)| d >= 2.0 * MARGIN * self.scale)
-            .collect();
+        // Each candidate's distance walks every boundary edge: in parallel.
+        let cands: Vec<(DVec2, f64)> = crate::par::each(tris.len().div_ceil(stride), |k| {
+            let c = tris[k * stride].iter().map(|&v| self.domain.positions[v as usize]).sum::<DVec2>() / 3.0;
+            (c, boundary_distance(self.domain, c))
+        })
+        .into_iter()
+        .filter(|&(_, d)| d >= 2.0 * MARGIN * self.scale)
+        .collect();
         while out.len() < count {
             let mut best: Option<(DVec2, f64)> = None;
             for &(c, d) in &cands {

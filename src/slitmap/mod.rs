@@ -540,35 +540,47 @@ impl SlitMapSolver {
         // afterwards): vertex v > 0 is unknown v − 1.
         let theta_unknown: Vec<Option<usize>> = (0..n).map(|v| v.checked_sub(1)).collect();
         let n_theta = n - 1;
-        // The two factorisations are independent: side by side.
-        let (h_chol, theta_chol) = crate::par::join(
+        // The two factorisations are independent: side by side, and beside them the indexes of
+        // the domain's triangles (the factorisations take unequal times).
+        let triangles = Arc::new(domain.triangles.clone());
+        let ((h_chol, theta_chol), (plane, vertex_faces)) = crate::par::join(
             || {
-                if n_h == 0 {
-                    // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity so the
-                    // type stays simple; it is never used with a non-empty right-hand side.
-                    return SparseCholesky::new(1, &[(0, 0, 1.0)]);
-                }
-                SparseCholesky::laplacian(&weights, &h_unknown, n_h, &order)
+                crate::par::join(
+                    || {
+                        if n_h == 0 {
+                            // Every vertex on Γ0: h is fully prescribed. Factorise a 1×1 identity
+                            // so the type stays simple; it is never used with a non-empty
+                            // right-hand side.
+                            return SparseCholesky::new(1, &[(0, 0, 1.0)]);
+                        }
+                        SparseCholesky::laplacian(&weights, &h_unknown, n_h, &order)
+                    },
+                    || {
+                        if n_theta == 0 {
+                            return SparseCholesky::new(1, &[(0, 0, 1.0)]);
+                        }
+                        SparseCholesky::laplacian(&weights, &theta_unknown, n_theta, &order)
+                    },
+                )
             },
             || {
-                if n_theta == 0 {
-                    return SparseCholesky::new(1, &[(0, 0, 1.0)]);
-                }
-                SparseCholesky::laplacian(&weights, &theta_unknown, n_theta, &order)
+                (
+                    inverse::InverseMap::new(&domain.positions, triangles.clone()),
+                    crate::mesh::topology::vertex_faces(n, &domain.triangles),
+                )
             },
         );
         let (h_chol, theta_chol) = (h_chol?, theta_chol?);
 
         let hole_pole = domain.loops[1..].iter().map(|lp| inscribed_centre(&domain.positions, lp)).collect();
 
-        let triangles = Arc::new(domain.triangles.clone());
         Ok(Self {
             hole_pole,
-            plane: inverse::InverseMap::new(&domain.positions, triangles.clone()),
+            plane,
             positions: domain.positions.clone(),
             triangles,
             fem_triangles,
-            vertex_faces: crate::mesh::topology::vertex_faces(n, &domain.triangles),
+            vertex_faces,
             loops: domain.loops.clone(),
             options: options.clone(),
             scale,

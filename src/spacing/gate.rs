@@ -109,25 +109,23 @@ impl<'a> Gate<'a> {
         );
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
-        let rho_gradient = surface
-            .triangles
-            .iter()
-            .zip(&corners)
-            .map(|(t, c)| {
-                let [a, b, d] = t.map(|v| surface.positions[v as usize]);
-                let (e1, e2) = (b - a, d - a);
-                let n = e1.cross(e2);
-                let area2 = n.length_squared();
-                if !(area2 > 0.0) {
-                    return f64::INFINITY;
-                }
-                // ∇f = ((f1 − f0)(e2 × n) + (f2 − f0)(n × e1)) / |n|².
-                let g = ((c[1].y - c[0].y) * e2.cross(n) + (c[2].y - c[0].y) * n.cross(e1)) / area2;
-                g.length()
-            })
-            .collect();
-        let face_index = ByRadius::new(rho_range.iter().copied());
-        let edge_index = ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y))));
+        let rho_gradient = crate::par::each(corners.len(), |f| {
+            let (t, c) = (surface.triangles[f], corners[f]);
+            let [a, b, d] = t.map(|v| surface.positions[v as usize]);
+            let (e1, e2) = (b - a, d - a);
+            let n = e1.cross(e2);
+            let area2 = n.length_squared();
+            if !(area2 > 0.0) {
+                return f64::INFINITY;
+            }
+            // ∇f = ((f1 − f0)(e2 × n) + (f2 − f0)(n × e1)) / |n|².
+            let g = ((c[1].y - c[0].y) * e2.cross(n) + (c[2].y - c[0].y) * n.cross(e1)) / area2;
+            g.length()
+        });
+        let (face_index, edge_index) = crate::par::join(
+            || ByRadius::new(rho_range.iter().copied()),
+            || ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y)))),
+        );
         Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm, lift_h }
     }
 

@@ -35,6 +35,11 @@
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
 //! in annulus mode the last ring is the inner circle |w| = R_A itself (the spiral ends on it).
 //!
+//! # Entry points
+//! [`spacing`] (one-off); [`spacing_on`] with the map's [`Lift`] built once for the spacing and
+//! the spiral; [`SpacingIndex`] (the map's indexes, which need no lift, built beside it) and
+//! [`SpacingIndex::rings`]. The three give the same rings.
+//!
 //! # Preconditions
 //! A slit map of the surface (same vertices), ball radius R > 0, 0 < h < R.
 //!
@@ -115,6 +120,8 @@ pub enum SpacingError {
     TooManyRings { max: usize },
     #[error("the slit domain point at radius {rho}, angle {theta} does not lie on the surface")]
     Lift { rho: f64, theta: f64 },
+    #[error("the spacing index was built for another slit map or surface than the lift's")]
+    IndexMismatch,
 }
 
 /// One ring of the plan.
@@ -211,24 +218,32 @@ struct Chain {
 
 /// One-off entry: the ring radii for `map` on `surface`.
 pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Result<Rings, SpacingError> {
-    check_options(options)?;
-    if let Some((map_vertices, surface_vertices)) = Lift::mismatch(surface, map) {
-        return Err(SpacingError::MeshMismatch { map: map_vertices, surface: surface_vertices });
-    }
     let faces = FaceTree::new(&surface.positions, &surface.triangles);
-    Spacer::new(&Lift::new(surface, map), &faces, options).run()
+    let index = SpacingIndex::new(surface, map, &faces, options)?;
+    index.rings(&Lift::new(surface, map))
 }
 
 /// The ring radii for the map `lift` inverts, on its surface (the lift built once per map is
 /// shared with [`crate::spiral::spiral_on`]); `faces` is the facet tree of that surface (a
 /// planner keeps one per part).
 pub fn spacing_on(lift: &Lift<'_>, faces: &FaceTree, options: &SpacingOptions) -> Result<Rings, SpacingError> {
-    check_options(options)?;
-    let surface_faces = lift.surface().triangles.len();
-    if faces.face_count() != surface_faces {
-        return Err(SpacingError::FacetTreeMismatch { tree: faces.face_count(), surface: surface_faces });
-    }
-    Spacer::new(lift, faces, options).run()
+    SpacingIndex::new(lift.surface(), lift.map(), faces, options)?.rings(lift)
+}
+
+/// What the spacing indexes of one slit map before its rings are found (the gate's edges,
+/// lines and hole-end points, the outer corners and creases in the log-polar strip, the slits
+/// and folds): it needs the map but not its inverse ([`Lift`]), so a planner builds the two
+/// side by side ([`SpacingIndex::new`], then [`SpacingIndex::rings`]).
+pub struct SpacingIndex<'a> {
+    surface: &'a Surface,
+    map: &'a SlitMap,
+    options: SpacingOptions,
+    gate: gate::Gate<'a>,
+    slits: Vec<SlitBand>,
+    lift_h: Option<f64>,
+    corners: Vec<(f64, f64)>,
+    creases: Vec<(DVec2, DVec2)>,
+    forbidden: Vec<(f64, f64)>,
 }
 
 fn check_options(o: &SpacingOptions) -> Result<(), SpacingError> {
@@ -402,9 +417,21 @@ struct Band {
     active: Vec<usize>,
 }
 
-impl<'a> Spacer<'a> {
-    fn new(lift: &'a Lift<'a>, faces: &FaceTree, options: &SpacingOptions) -> Self {
-        let (surface, map) = (lift.surface(), lift.map());
+impl<'a> SpacingIndex<'a> {
+    /// The indexes of `map` on `surface` (`faces`: its facet tree) for `options`, checked first.
+    pub fn new(
+        surface: &'a Surface,
+        map: &'a SlitMap,
+        faces: &FaceTree,
+        options: &SpacingOptions,
+    ) -> Result<Self, SpacingError> {
+        check_options(options)?;
+        if let Some((map_vertices, surface_vertices)) = Lift::mismatch(surface, map) {
+            return Err(SpacingError::MeshMismatch { map: map_vertices, surface: surface_vertices });
+        }
+        if faces.face_count() != surface.triangles.len() {
+            return Err(SpacingError::FacetTreeMismatch { tree: faces.face_count(), surface: surface.triangles.len() });
+        }
         // In the log-polar strip the two sides of a slit are exactly on its line (see `lift`):
         // only radii within rounding of the slit radius are ambiguous.
         let slits = map
@@ -417,10 +444,6 @@ impl<'a> Spacer<'a> {
                 sag: 1e-6 * s.radius.max(1e-3),
             })
             .collect();
-        let r_min = match map.mode {
-            Mode::Disk => 0.0,
-            Mode::Annulus { inner_radius, .. } => inner_radius,
-        };
         let mut forbidden: Vec<(f64, f64)> = map
             .flipped_faces()
             .into_iter()
@@ -446,13 +469,32 @@ impl<'a> Spacer<'a> {
             || (corner_angles(surface, map), creases(surface, map)),
             || gate::Gate::new(surface, map, faces, options.radius_mm, lift_h),
         );
+        Ok(Self { surface, map, options: options.clone(), gate, slits, lift_h, corners, creases, forbidden: merged })
+    }
+
+    /// The rings, with `lift` the inverse of this index's map on its surface.
+    pub fn rings(self, lift: &Lift<'_>) -> Result<Rings, SpacingError> {
+        if !(std::ptr::eq(lift.map(), self.map) && std::ptr::eq(lift.surface(), self.surface)) {
+            return Err(SpacingError::IndexMismatch);
+        }
+        Spacer::new(lift, self).run()
+    }
+}
+
+impl<'a> Spacer<'a> {
+    fn new(lift: &'a Lift<'a>, index: SpacingIndex<'a>) -> Self {
+        let SpacingIndex { map, options, gate, slits, lift_h, corners, creases, forbidden, .. } = index;
+        let r_min = match map.mode {
+            Mode::Disk => 0.0,
+            Mode::Annulus { inner_radius, .. } => inner_radius,
+        };
         Self {
             lift,
             gate,
             gate_compromises: 0,
             corners,
             creases,
-            forbidden: merged,
+            forbidden,
             slits,
             mode: map.mode,
             r_min,
@@ -460,7 +502,7 @@ impl<'a> Spacer<'a> {
             h: options.scallop_mm * options.target_fraction,
             lift_h,
             meridian_mm: options.meridian_spacing_mm.unwrap_or(0.5 * options.radius_mm),
-            options: options.clone(),
+            options,
             trials: 0,
             meridians: 0,
             fold_compromises: 0,
@@ -764,13 +806,7 @@ impl<'a> Spacer<'a> {
 
     /// The meridians below ring `hi` (spaced along its surface curve, plus every slit tip, outer
     /// corner and crease crossing) and ring k's centre chains on them; also the ring's length.
-    fn band(
-        &self,
-        hi: f64,
-        first: bool,
-        last_step: Option<f64>,
-        with_creases: bool,
-    ) -> BandMade {
+    fn band(&self, hi: f64, first: bool, last_step: Option<f64>, with_creases: bool) -> BandMade {
         let (length, cumulative) = self.ring_length(hi)?;
         let n = ((length / self.meridian_mm).ceil() as usize).clamp(16, 200_000);
         let mut thetas: Vec<f64> = Vec::with_capacity(n + 6 * self.slits.len());
@@ -947,11 +983,17 @@ impl<'a> Spacer<'a> {
     /// below it that one of them rejects (`bad` when none did).
     fn lowest_on_active(&mut self, band: &Band, bad: f64, step: f64) -> Result<(f64, f64), SpacingError> {
         let hi = band.hi;
-        let passes = |this: &mut Self, rho: f64| -> Result<bool, SpacingError> {
+        // Whether all pass does not depend on the order they are tried in, but a failing trial
+        // stops at its first failure: the meridian that failed last is tried first (the newest
+        // first to begin with: the others passed at the radius that it failed).
+        let mut order: Vec<usize> = band.active.iter().rev().copied().collect();
+        let mut passes = |this: &mut Self, rho: f64| -> Result<bool, SpacingError> {
             this.trials += 1;
             let this = &*this;
-            let failed =
-                crate::par::find_first(band.active.len(), |k| Ok(!this.meridian_ok(band, band.active[k], rho)?))?;
+            let failed = crate::par::find_first(order.len(), |k| Ok(!this.meridian_ok(band, order[k], rho)?))?;
+            if let Some(k) = failed {
+                order[..=k].rotate_right(1);
+            }
             Ok(failed.is_none())
         };
         let (mut ok, mut bad) = (hi, bad);
