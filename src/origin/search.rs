@@ -47,8 +47,8 @@ pub(crate) struct Search<'s, 'a> {
     pub best: Option<(DVec2, Energy, SlitMap)>,
     /// Best point of each hole's offset curve, once computed (`None` inside: no feasible point).
     offsets: Vec<Option<Option<(DVec2, f64)>>>,
-    /// Energies computed ahead, in parallel, of the sequential search asking for them (see
-    /// [`Search::prefetch`]).
+    /// Energies (with their maps) computed ahead, in parallel, of the sequential search asking
+    /// for them (see [`Search::prefetch`]).
     ahead: Vec<(DVec2, Option<(Energy, SlitMap)>)>,
 }
 
