@@ -682,7 +682,8 @@ impl<'a> Spacer<'a> {
                 let mid = 0.5 * (ok + no);
                 let centres = self.centres(mid, Some(&focus))?;
                 // With a margin: the band's next points lie beside these.
-                if gate::Cutter::new(&rings(upper, &centres), r, GATE_BISECTION_MARGIN * h).uncut(&bad).is_empty() {
+                if gate::Cutter::new(&ring_lines(upper, &centres), r, GATE_BISECTION_MARGIN * h).uncut(&bad).is_empty()
+                {
                     ok = mid;
                 } else {
                     no = mid;
@@ -709,7 +710,7 @@ impl<'a> Spacer<'a> {
         lower: gate::RingLine,
     ) -> Result<(gate::RingLine, Vec<gate::GatePoint>), SpacingError> {
         let h = self.options.scallop_mm * GATE_FRACTION;
-        let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&rings(upper, &lower), self.ball, h));
+        let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&ring_lines(upper, &lower), self.ball, h));
         Ok((lower, bad))
     }
 
@@ -1126,7 +1127,7 @@ impl<'a> Spacer<'a> {
 type BandMade = Result<(Band, f64), SpacingError>;
 
 /// Ring k's centres (none above the first ring) and the ring below.
-fn rings<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
+fn ring_lines<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
     upper.into_iter().chain([lower]).collect()
 }
 

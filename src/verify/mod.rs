@@ -280,12 +280,12 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
 /// `surface`: see the module docs for what is measured.
 pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions) -> Result<Verification, VerifyError> {
     let (r, h, cell, search) = check_options(options)?;
-    check_surface(surface)?; // before the valleys index its faces
-    let valleys = options.valley_lift_mm.map(|lift| facet_valleys(surface, r, lift));
     // Independent: the samples come from the surface alone.
     let (samples, volume) =
         crate::par::join(|| sample_surface(surface, options.samples, options.seed), || SweptVolume::new(passes, r));
     let (samples, volume) = (samples?, volume?);
+    // The surface is checked (by the sampling) before the valleys index its faces.
+    let valleys = options.valley_lift_mm.map(|lift| facet_valleys(surface, r, lift));
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
     // The figures of the samples (sequential: sums and sorts) beside the probes of the vertices.
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
