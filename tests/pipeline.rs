@@ -364,11 +364,15 @@ fn issue_4_exact_facets_ride_the_flat_of_a_cad_part_flat() {
 }
 
 #[test]
-fn issue_4_exact_facets_keep_the_scallop_outside_the_facet_valleys() {
-    // wavy_mesh_with_hole's facets turn 10–14° at its bench scale (h = R/150): a ball riding
-    // them exactly lifts by up to about 2 h in the valleys between them, where no path can leave
-    // less. The verifier reports those faces apart; elsewhere the spacing keeps h (1.36 h before
-    // it planned for the lifts).
+fn issue_4_exact_facets_report_the_facet_valleys_no_ball_reaches() {
+    // wavy_mesh_with_hole's facets turn 10–14° at its bench scale (h = R/150). A ball along a
+    // vertex normal rides up to about 2 h off the facets beside its creases, and the verifier
+    // used to excuse every face where it did (17 % of the area, 0.97 h elsewhere). It now
+    // excuses only the samples over which every ball touching the facets leaves more than
+    // 0.75 h (the concave creases' floors, 0.3 % of the area): the rest is within reach of
+    // some ball, and there the path keeps h but on a few spots beside the valleys, where the
+    // facets alone leave 0.5–0.75 h and the spacing does not plan for it (1.39 h here, 1.81 h
+    // with R rounded to 6 digits as the bench's CLI run has it; issue 4).
     let name = "wavy_mesh_with_hole.stl";
     let Some((p, diagonal)) = shared_planner(name) else { return };
     let r = diagonal / 60.0;
@@ -379,14 +383,16 @@ fn issue_4_exact_facets_keep_the_scallop_outside_the_facet_valleys() {
     let h = options.scallop_mm;
     let share = v.valley_area_mm2 / p.surface.area();
     println!(
-        "{name}: max {:.3} h; valleys {:.1} % of the area; elsewhere max {:.3} h",
+        "{name}: max {:.3} h; valleys {:.2} % of the area; elsewhere max {:.3} h",
         v.max_scallop_mm / h,
         100.0 * share,
         v.max_scallop_outside_valleys_mm / h
     );
-    assert!(share > 0.0 && share < 0.25, "valleys: {share}");
-    assert!(v.max_scallop_mm > 1.02 * h, "the valleys keep more than h");
-    assert!(v.max_scallop_outside_valleys_mm <= 1.02 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    assert!(share > 0.0 && share < 0.01, "valleys: {share}");
+    assert!(v.max_scallop_mm > 1.5 * h, "the valleys keep more than h");
+    assert!(v.max_scallop_outside_valleys_mm < v.max_scallop_mm);
+    // Not yet h: a bound on the spots beside the valleys (see above).
+    assert!(v.max_scallop_outside_valleys_mm <= 1.9 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
     assert_eq!(v.gouges, 0);
 }
 

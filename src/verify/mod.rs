@@ -24,10 +24,10 @@
 //! per-cell maximum scallop over a 3D grid of cells), gouges, uncovered samples, CT² = Σ CT² ·
 //! (area per sample) and max CT, retractions (passes − 1), and the scallop at every surface
 //! vertex for the page's heat map. [`path_metrics`] gives the path's own figures: length, turning
-//! angles, seed 003's smoothness ρ² (eq. 33), time at a feed. With exact facets, the faces
-//! where the ball riding the facets lifts off them by more than a given height (facet valleys,
-//! [`VerifyOptions::valley_lift_mm`]) are reported apart: their area, and the largest scallop
-//! outside them.
+//! angles, seed 003's smoothness ρ² (eq. 33), time at a feed. With exact facets, the samples
+//! over which every ball touching the facets round them leaves more than a given height (facet
+//! valleys, [`VerifyOptions::valley_lift_mm`]; `reach`) are reported apart: their area, and
+//! the largest scallop outside them.
 //!
 //! # Preconditions
 //! A surface from [`crate::mesh`] (unit vertex normals towards the tool, face areas); finite ball
@@ -41,9 +41,11 @@
 //! on every target (only `+ − × ÷ sqrt`).
 
 mod capsule;
+mod reach;
 mod swept;
 
 pub use capsule::Capsule;
+pub use reach::GRID_SPACING;
 pub use swept::{count_runs, Probe, Prober, SweptVolume};
 
 use crate::fixtures::SplitMix64;
@@ -69,11 +71,12 @@ pub struct VerifyOptions {
     /// A sample whose normal meets no ball within this height is uncovered, mm; `None` = R.
     /// Must be > 0.
     pub max_scallop_search_mm: Option<f64>,
-    /// With exact facets: a face is a *facet valley* when a ball of radius R placed along one
-    /// of its corner normals must move out along it by more than this to clear the face's plane
-    /// (R(1/cos α − 1), α the corner normal's tilt from the face's): where facets meet in such a
-    /// valley, about that much is left whatever the path. Their area and the largest scallop
-    /// elsewhere are reported apart. `None` (default): no face is. Must be finite and ≥ 0.
+    /// With exact facets: a sample is in a *facet valley* when the balls of radius R that
+    /// touch the facets round it without cutting them (each moved out along its facet's normal
+    /// until clear) leave more than this over it along its normal: no path leaves less there
+    /// (a concave crease sharper than the ball, a groove narrower than it). Their area and the
+    /// largest scallop elsewhere are reported apart. `None` (default): no sample is. Must be
+    /// finite, ≥ 0 and below R.
     pub valley_lift_mm: Option<f64>,
 }
 
@@ -114,7 +117,8 @@ pub struct Verification {
     pub gouges: usize,
     /// Deepest gouge, mm (0 when `gouges` = 0).
     pub max_gouge_mm: f64,
-    /// Area of the facet valleys (see [`VerifyOptions::valley_lift_mm`]), mm².
+    /// Area of the facet valleys (see [`VerifyOptions::valley_lift_mm`]): the surface's area
+    /// times the share of the samples in them, mm².
     pub valley_area_mm2: f64,
     /// Largest scallop over the covered samples outside the facet valleys, mm (0 when none).
     pub max_scallop_outside_valleys_mm: f64,
@@ -265,8 +269,8 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
         return bad(format!("gouge_tolerance_mm must be ≥ 0 and below the ball radius {r}, got {tol}"));
     }
     if let Some(lift) = o.valley_lift_mm {
-        if !(lift.is_finite() && lift >= 0.0) {
-            return bad(format!("valley_lift_mm must be finite and ≥ 0, got {lift}"));
+        if !(lift.is_finite() && lift >= 0.0 && lift < r) {
+            return bad(format!("valley_lift_mm must be ≥ 0 and below the ball radius {r}, got {lift}"));
         }
     }
     let search = o.max_scallop_search_mm.unwrap_or(r);
@@ -284,22 +288,22 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let (samples, volume) =
         crate::par::join(|| sample_surface(surface, options.samples, options.seed), || SweptVolume::new(passes, r));
     let (samples, volume) = (samples?, volume?);
-    // The surface is checked (by the sampling) before the valleys index its faces.
-    let valleys = options.valley_lift_mm.map(|lift| facet_valleys(surface, r, lift));
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
-    // The figures of the samples (sequential: sums and sorts) beside the probes of the vertices.
+    // The valleys and the figures of the samples beside the probes of the vertices.
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
-    let (f, vertex_probes) = crate::par::join(
-        || sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref()),
+    let ((f, valley_samples), vertex_probes) = crate::par::join(
+        || {
+            let valleys = options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, &samples, &probes, r, lift));
+            let f = sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref());
+            (f, valleys.map_or(0, |v| v.iter().filter(|&&x| x).count()))
+        },
         || probe_all(&volume, surface.positions.len(), vertex, h, search),
     );
-    let valley_area_mm2 = valleys.map_or(0.0, |v| {
-        v.iter().zip(&surface.face_areas).filter(|(&valley, _)| valley).fold(0.0, |sum, (_, a)| sum + a)
-    });
     let n = samples.len();
     let vertex_scallop_mm = vertex_probes.iter().map(|p| p.scallop.unwrap_or(search)).collect();
     let vertex_uncovered = vertex_probes.iter().map(|p| p.scallop.is_none()).collect();
     let area_per_sample = surface.area() / n as f64;
+    let valley_area_mm2 = valley_samples as f64 * area_per_sample;
     Ok(Verification {
         samples: n,
         max_scallop_mm: f.scallops.last().copied().unwrap_or(0.0),
@@ -356,7 +360,7 @@ fn sample_figures(
     let (mut ct_sum, mut ct2_sum, mut max_ct) = (0u64, 0u64, 0u32);
     let mut worst: Option<(f64, DVec3)> = None;
     let origin = surface.positions.iter().fold(DVec3::splat(f64::INFINITY), |m, &p| m.min(p));
-    for (s, probe) in samples.iter().zip(probes) {
+    for (i, (s, probe)) in samples.iter().zip(probes).enumerate() {
         if probe.depth > gouge_tolerance_mm {
             gouges += 1;
             max_gouge = max_gouge.max(probe.depth);
@@ -367,7 +371,7 @@ fn sample_figures(
         max_ct = max_ct.max(ct);
         if let Some(t) = probe.scallop {
             scallops.push(t);
-            if !valleys.is_some_and(|v| v[s.face as usize]) {
+            if !valleys.is_some_and(|v| v[i]) {
                 max_outside_valleys = max_outside_valleys.max(t);
             }
             let key = ((s.position - origin) / cell).floor();
@@ -395,12 +399,6 @@ fn sample_figures(
         worst,
         max_outside_valleys,
     }
-}
-
-/// Per face, whether it is a facet valley (see [`VerifyOptions::valley_lift_mm`]) for a ball of
-/// radius `r`.
-pub fn facet_valleys(surface: &Surface, r: f64, lift_mm: f64) -> Vec<bool> {
-    (0..surface.triangles.len()).map(|f| surface.face_lift_mm(f, r) > lift_mm).collect()
 }
 
 /// Probes the `n` points `at(i)` (position, normal), in index order.
