@@ -397,6 +397,35 @@ fn issue_4_exact_facets_report_the_facet_valleys_no_ball_reaches() {
 }
 
 #[test]
+fn issue_4_the_valleys_of_a_sharp_crease_reach_past_its_faces() {
+    // beetle's legs meet its body in concave creases of about 70° at its bench scale (R =
+    // diagonal / 60, h = R / 150): the ball resting in one stays up to 30 h above the floor and
+    // touches the flanks R·tan 35° from it, several faces away. The verifier excused only the
+    // faces where a ball along a corner normal rode up and reported 27 h beside them; the
+    // samples no touching ball gets within 0.75 h of are the valleys now.
+    let name = "beetle.stl";
+    let Some((p, diagonal)) = shared_planner(name) else { return };
+    let r = diagonal / 60.0;
+    let options =
+        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
+    let pl = plan(&p, &options);
+    let v = pl.verification().expect("verified");
+    let h = options.scallop_mm;
+    let share = v.valley_area_mm2 / p.surface.area();
+    println!(
+        "{name}: max {:.2} h; valleys {:.2} % of the area; elsewhere max {:.3} h",
+        v.max_scallop_mm / h,
+        100.0 * share,
+        v.max_scallop_outside_valleys_mm / h
+    );
+    assert!(v.max_scallop_mm > 20.0 * h, "the creases keep {} h", v.max_scallop_mm / h);
+    assert!(share > 0.0 && share < 0.03, "valleys: {share}");
+    // Beside them the ball riding the interpolated normals still leaves more than h (issue 4).
+    assert!(v.max_scallop_outside_valleys_mm < 2.0 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    assert_eq!(v.gouges, 0);
+}
+
+#[test]
 fn issue_4_exact_facets_plan_for_the_balls_lift_off_curved_facets() {
     // plate_holes' curved regions are coarse CAD facets whose recomputed normals tilt about 5.5°
     // from the facets at their edges: the clearance lifts the balls there by up to 0.69 h, and
