@@ -364,7 +364,7 @@ impl Planner {
                     .then_some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
                 ..VerifyOptions::default()
             };
-            Ok(Some(verify::verify(self.riding(options.facets), &[centres], &verify_options)?))
+            Ok(Some(verify::verify_with_faces(self.riding(options.facets), &self.faces, &[centres], &verify_options)?))
         };
         let (verification, gcode) = crate::par::beside(verify_centres, || {
             let header = header_lines(options, &origin, &rings, &summary);

@@ -363,6 +363,26 @@ fn issue_4_exact_facets_ride_the_flat_of_a_cad_part_flat() {
     assert_eq!(v.gouges, 0);
 }
 
+/// Plans the shared mesh `name` with exact facets at the bench's scale (R = diagonal / 60,
+/// h = R / 150, 5-axis) and prints its facet-valley figures: the verification, h and the
+/// valleys' share of the area; `None` when the mesh is absent.
+fn exact_valleys_at_bench_scale(name: &str) -> Option<(slitpath::verify::Verification, f64, f64)> {
+    let (p, diagonal) = shared_planner(name)?;
+    let r = diagonal / 60.0;
+    let options =
+        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
+    let v = plan(&p, &options).verification().expect("verified").clone();
+    let h = options.scallop_mm;
+    let share = v.valley_area_mm2 / p.surface.area();
+    println!(
+        "{name}: max {:.3} h; valleys {:.2} % of the area; elsewhere max {:.3} h",
+        v.max_scallop_mm / h,
+        100.0 * share,
+        v.max_scallop_outside_valleys_mm / h
+    );
+    Some((v, h, share))
+}
+
 #[test]
 fn issue_4_exact_facets_report_the_facet_valleys_no_ball_reaches() {
     // wavy_mesh_with_hole's facets turn 10–14° at its bench scale (h = R/150). A ball along a
@@ -373,21 +393,7 @@ fn issue_4_exact_facets_report_the_facet_valleys_no_ball_reaches() {
     // some ball, and there the path keeps h but on a few spots beside the valleys, where the
     // facets alone leave 0.5–0.75 h and the spacing does not plan for it (1.39 h here, 1.81 h
     // with R rounded to 6 digits as the bench's CLI run has it; issue 4).
-    let name = "wavy_mesh_with_hole.stl";
-    let Some((p, diagonal)) = shared_planner(name) else { return };
-    let r = diagonal / 60.0;
-    let options =
-        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
-    let pl = plan(&p, &options);
-    let v = pl.verification().expect("verified");
-    let h = options.scallop_mm;
-    let share = v.valley_area_mm2 / p.surface.area();
-    println!(
-        "{name}: max {:.3} h; valleys {:.2} % of the area; elsewhere max {:.3} h",
-        v.max_scallop_mm / h,
-        100.0 * share,
-        v.max_scallop_outside_valleys_mm / h
-    );
+    let Some((v, h, share)) = exact_valleys_at_bench_scale("wavy_mesh_with_hole.stl") else { return };
     assert!(share > 0.0 && share < 0.01, "valleys: {share}");
     assert!(v.max_scallop_mm > 1.5 * h, "the valleys keep more than h");
     assert!(v.max_scallop_outside_valleys_mm < v.max_scallop_mm);
@@ -403,21 +409,7 @@ fn issue_4_the_valleys_of_a_sharp_crease_reach_past_its_faces() {
     // touches the flanks R·tan 35° from it, several faces away. The verifier excused only the
     // faces where a ball along a corner normal rode up and reported 27 h beside them; the
     // samples no touching ball gets within 0.75 h of are the valleys now.
-    let name = "beetle.stl";
-    let Some((p, diagonal)) = shared_planner(name) else { return };
-    let r = diagonal / 60.0;
-    let options =
-        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
-    let pl = plan(&p, &options);
-    let v = pl.verification().expect("verified");
-    let h = options.scallop_mm;
-    let share = v.valley_area_mm2 / p.surface.area();
-    println!(
-        "{name}: max {:.2} h; valleys {:.2} % of the area; elsewhere max {:.3} h",
-        v.max_scallop_mm / h,
-        100.0 * share,
-        v.max_scallop_outside_valleys_mm / h
-    );
+    let Some((v, h, share)) = exact_valleys_at_bench_scale("beetle.stl") else { return };
     assert!(v.max_scallop_mm > 20.0 * h, "the creases keep {} h", v.max_scallop_mm / h);
     assert!(share > 0.0 && share < 0.03, "valleys: {share}");
     // Beside them the ball riding the interpolated normals still leaves more than h (issue 4).

@@ -6,9 +6,11 @@
 
 use glam::DVec3;
 use slitpath::fixtures;
+use slitpath::mesh::nearest::FaceTree;
 use slitpath::mesh::{self, MeshOptions, Surface, TriMesh};
 use slitpath::verify::{
-    count_runs, path_metrics, sample_surface, verify, SweptVolume, Verification, VerifyError, VerifyOptions,
+    count_runs, path_metrics, sample_surface, verify, verify_with_faces, SweptVolume, Verification, VerifyError,
+    VerifyOptions,
 };
 
 const R: f64 = 3.0;
@@ -530,6 +532,23 @@ fn facet_valleys_are_where_no_ball_touching_the_facets_reaches() {
     // Without the option no sample is in a valley.
     let plain = verify(&steep, &passes, &VerifyOptions { valley_lift_mm: None, ..options }).unwrap();
     assert_eq!((plain.valley_area_mm2, plain.max_scallop_outside_valleys_mm), (0.0, plain.max_scallop_mm));
+}
+
+#[test]
+fn the_planners_facet_tree_gives_the_same_verification() {
+    // verify_with_faces searches a facet tree it is given instead of building one: the same
+    // figures, and a typed error for another surface's tree.
+    let passes: Vec<Vec<DVec3>> =
+        (-12..=12).map(|k| vec![DVec3::new(k as f64, -12.0, R + 2.0), DVec3::new(k as f64, 12.0, R + 2.0)]).collect();
+    let options = VerifyOptions { samples: 20_000, valley_lift_mm: Some(0.015), ..VerifyOptions::default() };
+    let steep = v_groove(7.0);
+    let faces = FaceTree::new(&steep.positions, &steep.triangles);
+    let given = verify_with_faces(&steep, &faces, &passes, &options).unwrap();
+    assert!(given.valley_area_mm2 > 0.0);
+    assert_eq!(given, verify(&steep, &passes, &options).unwrap());
+    let other = flat_disk(5.0);
+    let wrong = FaceTree::new(&other.positions, &other.triangles);
+    assert!(matches!(verify_with_faces(&steep, &wrong, &passes, &options), Err(VerifyError::InvalidSurface(_))));
 }
 
 #[test]

@@ -49,6 +49,7 @@ pub use reach::GRID_SPACING;
 pub use swept::{count_runs, Probe, Prober, SweptVolume};
 
 use crate::fixtures::SplitMix64;
+use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
 use glam::DVec3;
 use serde::Serialize;
@@ -283,6 +284,33 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
 /// Verifies the path `passes` (continuous cutting passes, polylines of ball centres) against
 /// `surface`: see the module docs for what is measured.
 pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions) -> Result<Verification, VerifyError> {
+    verify_on(surface, None, passes, options)
+}
+
+/// [`verify`] with the facet tree of `surface` already built (its positions and triangles, as
+/// the planner keeps one): the facet valleys search it instead of building their own.
+pub fn verify_with_faces(
+    surface: &Surface,
+    faces: &FaceTree,
+    passes: &[Vec<DVec3>],
+    options: &VerifyOptions,
+) -> Result<Verification, VerifyError> {
+    if faces.face_count() != surface.triangles.len() {
+        return Err(VerifyError::InvalidSurface(format!(
+            "the facet tree has {} faces, the surface {}",
+            faces.face_count(),
+            surface.triangles.len()
+        )));
+    }
+    verify_on(surface, Some(faces), passes, options)
+}
+
+fn verify_on(
+    surface: &Surface,
+    faces: Option<&FaceTree>,
+    passes: &[Vec<DVec3>],
+    options: &VerifyOptions,
+) -> Result<Verification, VerifyError> {
     let (r, h, cell, search) = check_options(options)?;
     // Independent: the samples come from the surface alone.
     let (samples, volume) =
@@ -293,7 +321,8 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
     let ((f, valley_samples), vertex_probes) = crate::par::join(
         || {
-            let valleys = options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, &samples, &probes, r, lift));
+            let valleys =
+                options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, faces, &samples, &probes, r, lift));
             let f = sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref());
             (f, valleys.map_or(0, |v| v.iter().filter(|&&x| x).count()))
         },

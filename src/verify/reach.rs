@@ -27,9 +27,11 @@ pub const GRID_SPACING: f64 = 0.05;
 
 /// Per sample, whether it lies in a facet valley: whether the balls of radius `r` touching the
 /// facets round it leave more than `lift_mm` over it along its normal (see the module docs).
-/// `probes` are the path's probes of `samples`. Preconditions: `0 ≤ lift_mm < r`.
+/// `probes` are the path's probes of `samples`; `faces`, the facet tree of `surface` when the
+/// caller has one (built here only when some sample needs it). Preconditions: `0 ≤ lift_mm < r`.
 pub(super) fn facet_valleys(
     surface: &Surface,
+    faces: Option<&FaceTree>,
     samples: &[SurfaceSample],
     probes: &[Probe],
     r: f64,
@@ -42,7 +44,14 @@ pub(super) fn facet_valleys(
     if deep.is_empty() {
         return valley;
     }
-    let faces = FaceTree::new(&surface.positions, &surface.triangles);
+    let built;
+    let faces = match faces {
+        Some(faces) => faces,
+        None => {
+            built = FaceTree::new(&surface.positions, &surface.triangles);
+            &built
+        }
+    };
     // r*(p) ≤ the entry into p's own ball: the rest are within reach.
     let own = crate::par::each(deep.len(), |k| {
         let s = &samples[deep[k]];
@@ -66,7 +75,7 @@ pub(super) fn facet_valleys(
         return valley;
     }
     let near = Near::new(measured.iter().map(|&(i, bound)| (samples[i].position, bound)), r);
-    let balls = touching_balls(surface, &faces, &near, r);
+    let balls = touching_balls(surface, faces, &near, r);
     let residual: Vec<f64> = match SweptVolume::new(&balls, r) {
         Ok(volume) => crate::par::map(
             measured.len(),
@@ -129,30 +138,35 @@ fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, r: f64) -> V
             (0..=k).map(|i| (0..=k - i).map(|j| ball(at(i, j))).collect()).collect();
         let mut out: Vec<Vec<DVec3>> =
             rows.iter().flatten().flatten().filter(|b| reaches(b.0)).map(|b| vec![b.0]).collect();
-        for i in 0..=k {
-            for j in 0..=k - i {
-                // The neighbours (i + 1, j), (i, j + 1) and (i + 1, j − 1).
-                let next = [(i + 1, j), (i, j + 1), (i + 1, j.wrapping_sub(1))];
-                for (i2, j2) in next.into_iter().filter(|&(i2, j2)| i2 + j2 <= k && j2 <= k) {
-                    let (Some(p), Some(q)) = (rows[i][j], rows[i2][j2]) else { continue };
-                    if p.1 == q.1 {
-                        continue;
-                    }
-                    // (still, moved) contacts, bisected towards where the ball starts moving.
-                    let (mut still, mut moved) = if q.1 { (at(i, j), at(i2, j2)) } else { (at(i2, j2), at(i, j)) };
-                    let mut last = None;
-                    for _ in 0..BISECTIONS {
-                        let mid = still.lerp(moved, 0.5);
-                        match ball(mid) {
-                            Some((centre, false)) => (still, last) = (mid, Some(centre)),
-                            Some((_, true)) => moved = mid,
-                            None => break,
-                        }
-                    }
-                    if let Some(centre) = last.filter(|&c| reaches(c)) {
-                        out.push(vec![centre]);
-                    }
+        // The ball where it starts moving, between a contact whose ball stays and one whose
+        // ball moves.
+        let resting = |mut still: DVec3, mut moved: DVec3| {
+            let mut last = None;
+            for _ in 0..BISECTIONS {
+                let mid = still.lerp(moved, 0.5);
+                match ball(mid) {
+                    Some((centre, false)) => (still, last) = (mid, Some(centre)),
+                    Some((_, true)) => moved = mid,
+                    None => break,
                 }
+            }
+            last
+        };
+        // Each contact (i, j) with its neighbours (i + 1, j), (i, j + 1) and (i + 1, j − 1).
+        let pairs = (0..=k).flat_map(|i| (0..=k - i).map(move |j| (i, j))).flat_map(|(i, j)| {
+            [(i + 1, j), (i, j + 1), (i + 1, j.wrapping_sub(1))]
+                .into_iter()
+                .filter(move |&(i2, j2)| i2 + j2 <= k && j2 <= k)
+                .map(move |next| ((i, j), next))
+        });
+        for ((i, j), (i2, j2)) in pairs {
+            let (Some(p), Some(q)) = (rows[i][j], rows[i2][j2]) else { continue };
+            if p.1 == q.1 {
+                continue;
+            }
+            let rest = if q.1 { resting(at(i, j), at(i2, j2)) } else { resting(at(i2, j2), at(i, j)) };
+            if let Some(centre) = rest.filter(|&c| reaches(c)) {
+                out.push(vec![centre]);
             }
         }
         out
