@@ -51,7 +51,7 @@ async fn whole_pipeline_in_the_browser() {
     let performance = web_sys::window().expect("a window").performance().expect("performance");
     let now = || performance.now();
     console_log!("whole pipeline, wasm (headless Chromium)\n{}", slitpath::bench::PLAN_HEADER);
-    for (name, mesh) in slitpath::bench::plan_cases() {
+    for (name, mesh) in slitpath::bench::plan_cases("") {
         yield_to_browser().await;
         match slitpath::bench::run_plan(&name, &mesh, &now) {
             Ok(row) => console_log!("{row}"),
