@@ -391,14 +391,15 @@ fn issue_4_exact_facets_report_the_facet_valleys_no_ball_reaches() {
     // excuses only the samples over which every ball touching the facets leaves more than
     // 0.75 h (the concave creases' floors, 0.3 % of the area): the rest is within reach of
     // some ball, and there the path keeps h but on a few spots beside the valleys, where the
-    // facets alone leave 0.5–0.75 h and the spacing does not plan for it (1.39 h here, 1.81 h
-    // with R rounded to 6 digits as the bench's CLI run has it; issue 4).
+    // facets alone leave 0.5–0.75 h and the spacing does not plan for it (1.31 h here, 1.35 h
+    // with R rounded to 6 digits as the bench's CLI run has it; 1.39 and 1.81 h while lifts up
+    // to 0.1 h were left to the margin; issue 4).
     let Some((v, h, share)) = exact_valleys_at_bench_scale("wavy_mesh_with_hole.stl") else { return };
     assert!(share > 0.0 && share < 0.01, "valleys: {share}");
     assert!(v.max_scallop_mm > 1.5 * h, "the valleys keep more than h");
     assert!(v.max_scallop_outside_valleys_mm < v.max_scallop_mm);
     // Not yet h: a bound on the spots beside the valleys (see above).
-    assert!(v.max_scallop_outside_valleys_mm <= 1.9 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    assert!(v.max_scallop_outside_valleys_mm <= 1.5 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
     assert_eq!(v.gouges, 0);
 }
 
@@ -412,8 +413,35 @@ fn issue_4_the_valleys_of_a_sharp_crease_reach_past_its_faces() {
     let Some((v, h, share)) = exact_valleys_at_bench_scale("beetle.stl") else { return };
     assert!(v.max_scallop_mm > 20.0 * h, "the creases keep {} h", v.max_scallop_mm / h);
     assert!(share > 0.0 && share < 0.03, "valleys: {share}");
-    // Beside them the ball riding the interpolated normals still leaves more than h (issue 4).
-    assert!(v.max_scallop_outside_valleys_mm < 2.0 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    // Beside them the ball riding the interpolated normals still leaves more than h (1.36 h;
+    // 1.42 h while lifts up to 0.1 h were left to the margin; issue 4).
+    assert!(v.max_scallop_outside_valleys_mm < 1.6 * h, "elsewhere {} h", v.max_scallop_outside_valleys_mm / h);
+    assert_eq!(v.gouges, 0);
+}
+
+#[test]
+fn issue_4_a_rim_point_the_first_ring_leaves_uncut_does_not_stall_the_spacing() {
+    // inverted_triangles at its bench scale (the default R = 3 mm, h = 0.02 mm), exact facets:
+    // the meridians put the first ring 2 µm inside the rim, and the gate still found a rim point
+    // (|w| = 1) uncut with the lifts planned from 0.03 h. It moved the ring onto the rim, so the
+    // next band began at |w| = 1 again with a zero step, and the spacing never returned. Points
+    // on the ring above's own line are now left to that ring (a gate compromise).
+    let Some((p, _)) = shared_planner("inverted_triangles.stl") else { return };
+    let options = PlanOptions { axes: FIVE_AXIS, post: Post::Cl, verify_samples: 20_000, ..PlanOptions::default() };
+    let pl = plan(&p, &options);
+    let v = pl.verification().expect("verified");
+    let h = options.scallop_mm;
+    println!(
+        "inverted_triangles: rings {} (gate compromises {}), max {:.3} h, outside the valleys {:.3} h",
+        pl.rings.rings.len(),
+        pl.rings.gate_compromises,
+        v.max_scallop_mm / h,
+        v.max_scallop_outside_valleys_mm / h
+    );
+    assert!(pl.rings.gate_compromises >= 1);
+    assert!(pl.rings.rings.windows(2).all(|w| w[1].radius < w[0].radius));
+    assert!(pl.rings.rings.len() < 1000, "{} rings", pl.rings.rings.len());
+    assert_eq!(pl.toolpath.stats.retractions, 1);
     assert_eq!(v.gouges, 0);
 }
 

@@ -322,8 +322,14 @@ const GATE_BISECTION_MARGIN: f64 = 0.95;
 /// A gate polyline's chords stay within this fraction of h of the ring.
 const GATE_SAG: f64 = 0.02;
 
-/// Lifts off the facets up to this fraction of h are left to the target's margin.
-const LIFT_FREE: f64 = 0.1;
+/// Lifts off the facets up to this fraction of h are left to the target's margin. That margin
+/// (1 − [`GATE_FRACTION`]) is mostly the path's chords' (the gate's polylines within
+/// [`GATE_SAG`]·h, the spiral's within 0.03 h along the normal), so only the smallest lifts are
+/// left to it. At 0.1 h plate_holes kept 1.075 h (pole `hole:5`, where the refinement tilts the
+/// flat top's normals 2.2°) and wavy_mesh_with_hole 1.81 h beside its creases (now 0.95 and
+/// 1.35 h, for 1.6 % and 8 % more path). The 40k-face panel's lifts (0.025 h) stay free, so its
+/// rings are not tested with lifts at all.
+const LIFT_FREE: f64 = 0.03;
 /// Lifts are planned for up to this fraction of h.
 const LIFT_CAP: f64 = 0.65;
 /// Lifts above this fraction of h are not planned for at all (see [`facet_lift_mm`]): the
@@ -592,7 +598,8 @@ impl<'a> Spacer<'a> {
     /// its result is checked on every meridian.
     fn next_radius(&mut self, band: &mut Band, last_step: Option<f64>) -> Result<f64, SpacingError> {
         let hi = band.hi;
-        let step = last_step.unwrap_or((hi - self.r_min) / 16.0).min(hi - self.r_min);
+        // Never zero: the search below grows its step from this one.
+        let step = last_step.unwrap_or((hi - self.r_min) / 16.0).max(1e-9 * (hi - self.r_min)).min(hi - self.r_min);
         // Known to fail on some meridian (or the floor).
         let mut bad = self.r_min;
         let ok = loop {
@@ -674,6 +681,13 @@ impl<'a> Spacer<'a> {
         for round in 1.. {
             if bad.is_empty() {
                 return Ok((lo, lower));
+            }
+            // Points on ring k's own line (the rim, for the first ring) are its to cut: ring
+            // k + 1 moved onto it would cut them no better and make no progress (the band was
+            // then spaced again and again, for ever).
+            bad.retain(|p| p.2 < hi);
+            if bad.is_empty() {
+                break;
             }
             let top = bad.iter().map(|p| p.2).fold(hi, f64::min);
             let focus: Vec<DVec3> = bad.iter().map(|p| p.0).collect();
@@ -1237,9 +1251,10 @@ mod tests {
         }
         // A normal facing away from the facet (a fold) is a valley too: nothing planned.
         assert_eq!(facet_lift_mm(-DVec3::Z, facet, r, h), 0.0);
-        // 2° lifts 1.8 µm (< 0.1 h: left to the margin); 5° lifts 11.5 µm: planned.
+        // 1° lifts 0.46 µm (< 0.03 h: left to the margin); 5° lifts 11.5 µm: planned.
         let tilted = |deg: f64| DVec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos());
-        assert_eq!(facet_lift_mm(tilted(2.0), facet, r, h), 0.0);
+        assert_eq!(facet_lift_mm(tilted(1.0), facet, r, h), 0.0);
+        assert!(facet_lift_mm(tilted(2.0), facet, r, h) > 0.05 * h);
         assert!(facet_lift_mm(tilted(5.0), facet, r, h) > 0.4 * h);
     }
 
