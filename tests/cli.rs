@@ -214,3 +214,37 @@ fn plan_keeps_the_ball_off_the_facets_unless_told_they_are_smooth() {
     let err = String::from_utf8(bad.stderr).unwrap();
     assert!(!bad.status.success() && err.trim().lines().count() == 1 && err.contains("--facets `round`"), "{err}");
 }
+
+#[test]
+fn issue_4_a_centroid_pole_the_map_cannot_carry_names_where_the_path_would_jump() {
+    // plate_holes' centroid lies 0.28 mm from the rim of its largest hole: the P1 map has too few
+    // faces between the two for the rings round the pole, and the spiral stops. The message gave
+    // the slit domain's radius and an angle counting every turn (−2139 rad); it now says where on
+    // the part the path would jump.
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes/plate_holes.stl");
+    if !path.exists() {
+        eprintln!("skipped: {} is absent", path.display());
+        return;
+    }
+    let out = temp("plate-centroid.ngc");
+    let run = slitpath(&["plan", path.to_str().unwrap(), "--origin", "centroid", "-o", out.to_str().unwrap()]);
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(!run.status.success() && err.trim().lines().count() == 1 && !err.contains("panicked"), "{err}");
+    assert!(err.contains("would jump") && err.contains("origin auto"), "{err}");
+    // Both ends of the jump, in millimetres on the part: beside the hole at (101.6, 154.5), z 12.7.
+    let points: Vec<[f64; 3]> = err
+        .split('(')
+        .skip(1)
+        .filter_map(|s| {
+            let v: Vec<f64> = s.split(')').next()?.split(", ").filter_map(|x| x.parse().ok()).collect();
+            (v.len() == 3).then(|| [v[0], v[1], v[2]])
+        })
+        .collect();
+    assert_eq!(points.len(), 2, "{err}");
+    for p in points {
+        assert!((p[0] - 101.6).hypot(p[1] - 154.5) < 10.0 && (p[2] - 12.7).abs() < 1e-3, "{p:?}: {err}");
+    }
+    let angle: f64 =
+        err.split("angle ").nth(1).and_then(|s| s.split(' ').next()).and_then(|s| s.parse().ok()).expect(&err);
+    assert!(angle.abs() <= std::f64::consts::PI, "{err}");
+}

@@ -36,7 +36,7 @@ use crate::slitmap::{Mode, SlitMap};
 use crate::spacing::{Lift, Rings};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 /// Which way the spiral runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -109,8 +109,8 @@ pub enum SpiralError {
     Lift { rho: f64, theta: f64 },
     #[error("the bridge from ring {ring} cannot clear the slits between radius {from} and {to}")]
     Blocked { ring: usize, from: f64, to: f64 },
-    #[error("the path jumps {gap_mm} mm at radius {rho}, angle {theta} of the slit domain: the slit map cannot carry a continuous path from this pole; choose another one (origin auto tries several)")]
-    Discontinuous { rho: f64, theta: f64, gap_mm: f64 },
+    #[error("the path would jump {gap_mm:.3} mm, from ({:.3}, {:.3}, {:.3}) to ({:.3}, {:.3}, {:.3}) mm (slit-domain radius {rho}, angle {theta:.4} rad): the slit map cannot carry a continuous path from this pole (a pole close to a hole does this on a coarse mesh); choose another one (origin auto tries several)", from_mm[0], from_mm[1], from_mm[2], to_mm[0], to_mm[1], to_mm[2])]
+    Discontinuous { rho: f64, theta: f64, gap_mm: f64, from_mm: [f64; 3], to_mm: [f64; 3] },
 }
 
 /// One point of the path.
@@ -465,7 +465,10 @@ fn march(
             }
             if step <= min_step {
                 let rho = piece.rho(u);
-                return Err(SpiralError::Discontinuous { rho, theta: sense * u, gap_mm: chord });
+                // arg w in (−π, π]: the build's angle u counts every turn of the spiral.
+                let theta = PI - (PI - sense * u).rem_euclid(TAU);
+                let (from_mm, to_mm) = (here.cc.to_array(), pb.cc.to_array());
+                return Err(SpiralError::Discontinuous { rho, theta, gap_mm: chord, from_mm, to_mm });
             }
             step = (0.5 * step).max(min_step);
             halvings += 1;
