@@ -265,9 +265,13 @@ impl Planner {
             ..SpiralOptions::default()
         };
         // `auto` promises a path: when the P1 map cannot carry one from the best pole, the next
-        // best poles the search saw are tried (reported as rejected).
+        // best poles the search saw are tried (reported as rejected). So does `centroid`, with
+        // the centroid moved away from its nearest boundary: beside a hole the map can have too
+        // few faces round the pole for its rings (plate_holes' centroid lies 0.28 mm from one).
+        let separation = FALLBACK_SEPARATION * self.domain_diagonal();
         let mut alternatives = match options.origin {
-            OriginChoice::Auto => origin.alternatives(FALLBACK_SEPARATION * self.domain_diagonal(), MAX_FALLBACKS),
+            OriginChoice::Auto => origin.alternatives(separation, MAX_FALLBACKS),
+            OriginChoice::Centroid => origin::away_from_boundary(&self.domain, origin.pole, separation, MAX_FALLBACKS),
             _ => Vec::new(),
         }
         .into_iter();
@@ -445,9 +449,11 @@ impl Planner {
     }
 }
 
-/// `auto` tries at most this many other poles when a path cannot be built from the best one.
+/// `auto` (and `centroid`) try at most this many other poles when a path cannot be built from
+/// the first one.
 pub const MAX_FALLBACKS: usize = 3;
-/// ... each at least this fraction of the flattened domain's diagonal from the poles tried.
+/// ... each at least this fraction of the flattened domain's diagonal from the poles tried
+/// (`centroid`: steps of it away from the boundary nearest to the centroid).
 pub const FALLBACK_SEPARATION: f64 = 0.05;
 
 impl PlanError {
@@ -596,7 +602,7 @@ pub struct OriginReport {
     pub e_min_centroid: f64,
     pub uniformity: f64,
     pub evaluations: usize,
-    /// Poles `auto` chose first and could not plan from (see [`MAX_FALLBACKS`]).
+    /// Poles `auto` or `centroid` chose first and could not plan from (see [`MAX_FALLBACKS`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub rejected: Vec<RejectedPole>,
 }

@@ -8,6 +8,7 @@ mod common;
 
 use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
+use slitpath::origin::OriginChoice;
 use slitpath::plan::{Facets, Plan, PlanOptions, Planner};
 use slitpath::{fixtures, mesh};
 
@@ -490,6 +491,34 @@ fn issue_3_auto_plans_plate_holes_from_the_next_pole_when_the_best_one_cannot_ca
 
 /// The one-off spacing and spiral entries check that the map is one of the surface before they
 /// build its inverse (a map of another mesh indexed out of bounds in the spiral's).
+#[test]
+fn issue_4_centroid_moves_off_a_hole_whose_map_cannot_carry_a_path() {
+    // plate_holes' centroid lies 0.28 mm from the rim of its largest hole: the P1 map has too few
+    // faces between them for the rings round the pole, and the spiral would jump 1.2 mm (an
+    // error, before). `centroid` now moves the pole straight away from that rim, 5 % of the
+    // flattened part's diagonal at a time, and reports the centroid as given up.
+    let Some((p, _)) = shared_planner("plate_holes.stl") else { return };
+    let options = PlanOptions { origin: OriginChoice::Centroid, verify_samples: 20_000, ..PlanOptions::default() };
+    let pl = plan(&p, &options);
+    let origin = &pl.report.origin;
+    println!(
+        "plate_holes, centroid: pole {:?} ({:?} mm), rejected {:?}",
+        origin.pole_uv, origin.pole_3d, origin.rejected
+    );
+    assert_eq!(origin.rejected.len(), 1);
+    let centroid = DVec2::from(origin.rejected[0].pole_uv);
+    assert_eq!(centroid, slitpath::origin::centroid_pole(&p.domain));
+    assert!(origin.rejected[0].reason.contains("would jump"), "{}", origin.rejected[0].reason);
+    // One step away: at least the fallback separation from the centroid.
+    let (lo, hi) = p.domain.positions.iter().fold((DVec2::MAX, DVec2::MIN), |(a, b), &q| (a.min(q), b.max(q)));
+    let moved = DVec2::from(origin.pole_uv).distance(centroid);
+    assert!(moved >= 0.999 * slitpath::plan::FALLBACK_SEPARATION * (hi - lo).length(), "moved {moved}");
+    assert_eq!(pl.toolpath.stats.retractions, 1);
+    let v = pl.verification().expect("verified");
+    assert!(v.max_scallop_mm <= 1.02 * options.scallop_mm, "{} h", v.max_scallop_mm / options.scallop_mm);
+    assert_eq!(v.gouges, 0);
+}
+
 #[test]
 fn spacing_and_spiral_refuse_a_map_of_another_mesh() {
     use slitpath::spacing::{self, SpacingError, SpacingOptions};

@@ -42,22 +42,49 @@ fn face_centroid(domain: &PlanarDomain, f: usize) -> DVec2 {
 
 /// Distance from `q` to the nearest boundary edge of the domain.
 pub(crate) fn boundary_distance(domain: &PlanarDomain, q: DVec2) -> f64 {
-    let mut d = f64::INFINITY;
+    nearest_boundary_point(domain, q).map_or(f64::INFINITY, |b| b.distance(q))
+}
+
+/// The point of the domain's boundary nearest to `q` (the first of equals, in loop order);
+/// `None` without a boundary.
+pub(crate) fn nearest_boundary_point(domain: &PlanarDomain, q: DVec2) -> Option<DVec2> {
+    let mut best: Option<(f64, DVec2)> = None;
     for lp in &domain.loops {
         for k in 0..lp.len() {
             let a = domain.positions[lp[k] as usize];
             let b = domain.positions[lp[(k + 1) % lp.len()] as usize];
-            d = d.min(segment_distance(q, a, b));
+            let p = segment_point(q, a, b);
+            let d = p.distance(q);
+            if best.map_or(true, |(bd, _)| d < bd) {
+                best = Some((d, p));
+            }
         }
     }
-    d
+    best.map(|(_, p)| p)
 }
 
-pub(crate) fn segment_distance(q: DVec2, a: DVec2, b: DVec2) -> f64 {
+/// The point of the segment ab nearest to `q`.
+fn segment_point(q: DVec2, a: DVec2, b: DVec2) -> DVec2 {
     let ab = b - a;
     let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
     let t = if t.is_finite() { t } else { 0.0 };
-    (a + ab * t - q).length()
+    a + ab * t
+}
+
+/// Poles `count` steps of `step` from `pole` straight away from its nearest boundary point
+/// (`pole` + k·`step` along that direction, k = 1…), keeping those inside the domain at least
+/// `step`/2 from every boundary: where a centroid beside a hole cannot carry a path, the
+/// nearest poles that leave the P1 map room round them.
+pub(crate) fn away_from_boundary(domain: &PlanarDomain, pole: DVec2, step: f64, count: usize) -> Vec<DVec2> {
+    let Some(b) = nearest_boundary_point(domain, pole) else { return Vec::new() };
+    let away = (pole - b).normalize_or_zero();
+    if away == DVec2::ZERO {
+        return Vec::new();
+    }
+    (1..=count)
+        .map(|k| pole + away * (step * k as f64))
+        .filter(|&q| face_containing(domain, q).is_some() && boundary_distance(domain, q) >= 0.5 * step)
+        .collect()
 }
 
 /// Bounding-box diagonal of the flattened domain.

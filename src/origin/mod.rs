@@ -49,6 +49,7 @@ mod locate;
 mod search;
 
 pub use energy::{Energy, EnergyEvaluator};
+pub(crate) use locate::away_from_boundary;
 pub use locate::{centroid_pole, pole_from_3d, pole_to_3d};
 
 use crate::mesh::Surface;

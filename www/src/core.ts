@@ -99,7 +99,7 @@ export interface PlanReport {
     e_min_centroid: number;
     uniformity: number;
     evaluations: number;
-    /** Poles `auto` chose first but could not plan from (the next best one was used). */
+    /** Poles `auto` or `centroid` chose first but could not plan from (the next one was used). */
     rejected?: { pole_uv: Vec2; e_min: number; reason: string }[];
   };
   rings: unknown;

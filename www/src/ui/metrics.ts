@@ -55,7 +55,7 @@ function rows(plan: PlanResult, limit: number): Row[] {
       "metric-origin",
       "Origin",
       `${origin.mode}, pole (${origin.pole_uv.map((v) => n3.format(v)).join(", ")})` +
-        (rejected > 0 ? ` — ${rejected} better pole${rejected > 1 ? "s" : ""} gave no path` : ""),
+        (rejected > 0 ? ` — ${rejected} pole${rejected > 1 ? "s" : ""} tried first gave no path` : ""),
       rejected > 0,
     ],
     ["metric-energy", "E_min (this pole)", `${n3.format(origin.e_min)} (uniformity ${n3.format(origin.uniformity)})`],
