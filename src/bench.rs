@@ -367,9 +367,10 @@ pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<Str
 }
 
 /// [`run_plan`] for the shared meshes, most of them unit-scale 3D shapes: where a sixtieth of the
-/// diagonal is below 3 mm the ball is that, h = R/150 (the same ratio), 5-axis with CL output
-/// (their walls exceed a table-table machine's A range). Two rows: facets exact (the default)
-/// and smooth, since these coarse meshes are where the two differ.
+/// diagonal is below 3 mm the ball is that, h = R/150 (the same ratio); always 5-axis with CL
+/// output (their walls exceed a table-table machine's A range, and some undercut a 3-axis tool:
+/// inverted_triangles). Two rows: facets exact (the default) and smooth, since these coarse
+/// meshes are where the two differ.
 pub fn run_plan_scaled(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
     let exact = plan_row(name, part, true, Facets::Exact, now)?;
     let smooth = plan_row("  (smooth)", part, true, Facets::Smooth, now)?;
@@ -383,11 +384,10 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn 
     let holes = out.surface.loops.len().saturating_sub(1);
     let (lo, hi) = crate::mesh::weld::bounding_box(&out.surface.positions);
     let mut options = crate::plan::PlanOptions { facets, ..crate::plan::PlanOptions::default() };
-    let small = (hi - lo).length() / 60.0;
-    if scaled && small < options.radius_mm {
-        options.radius_mm = small;
-        options.scallop_mm = small / 150.0;
-        options.axes = crate::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 };
+    if scaled {
+        options.radius_mm = options.radius_mm.min((hi - lo).length() / 60.0);
+        options.scallop_mm = options.radius_mm / 150.0;
+        options.axes = crate::toolpath::Axes::five_default();
         options.post = crate::gcode::Post::Cl;
     }
     let planner = crate::plan::Planner::new(out, now).map_err(|e| e.to_string())?;
