@@ -32,7 +32,9 @@ pub struct PlanOptions {
     pub radius_mm: f64,
     /// Scallop-height limit h, mm. Default 0.02.
     pub scallop_mm: f64,
-    /// Default [`OriginChoice::Auto`].
+    /// Default [`OriginChoice::Auto`]. `Auto` and `Centroid` move on to other poles when the map
+    /// cannot carry a path from the first (see [`MAX_FALLBACKS`]; reported in the origin's
+    /// `rejected`); the other choices are planned as given or not at all.
     pub origin: OriginChoice,
     /// Default inward.
     pub direction: Direction,
