@@ -2,6 +2,8 @@
 //! stderr with a non-zero exit, `fixture` writes a readable STL.
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
 use slitpath::{fixtures, mesh};
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -91,7 +93,7 @@ fn fixture_writes_every_named_part() {
 
 #[test]
 fn shared_meshes_as_the_issue_states() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
+    let dir = common::shared_mesh_dir();
     for (file, loops, machined_loops) in
         [("beetle.stl", 11, None), ("face_holes.stl", 7, None), ("plate_holes.stl", 0, Some(6))]
     {
@@ -222,7 +224,7 @@ fn issue_4_a_pole_the_map_cannot_carry_names_where_the_path_would_jump() {
     // point it is planned as given or not at all (`centroid` moves on, see tests/pipeline.rs). The
     // message gave the slit domain's radius and an angle counting every turn (−2139 rad); it now
     // says where on the part the path would jump.
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes/plate_holes.stl");
+    let path = common::shared_mesh_dir().join("plate_holes.stl");
     if !path.exists() {
         eprintln!("skipped: {} is absent", path.display());
         return;

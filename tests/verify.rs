@@ -454,6 +454,11 @@ fn v_groove(half_deg: f64) -> Surface {
     surface_of(&TriMesh { positions, triangles })
 }
 
+/// Straight passes of ball centres along `v_groove` (in y), 1 mm apart, at the height R + 2 mm.
+fn groove_passes() -> Vec<Vec<DVec3>> {
+    (-12..=12).map(|k| vec![DVec3::new(k as f64, -12.0, R + 2.0), DVec3::new(k as f64, 12.0, R + 2.0)]).collect()
+}
+
 /// Brute force over every ball touching `v_groove(half_deg)` near its floor: the least material
 /// they leave over the sample at `p` along `n` (both in the xz plane: the groove runs along y).
 /// They are the ball resting on both flanks, centred R/cos α over the floor, and the balls
@@ -493,8 +498,7 @@ fn facet_valleys_are_where_no_ball_touching_the_facets_reaches() {
     // strip along the 7° floor is a valley and nothing of the 4° one; a ball along the floor's
     // vertex normal (the bisector) would ride up 22.6 µm on every face touching the floor, but
     // balls touching elsewhere reach most of them.
-    let passes: Vec<Vec<DVec3>> =
-        (-12..=12).map(|k| vec![DVec3::new(k as f64, -12.0, R + 2.0), DVec3::new(k as f64, 12.0, R + 2.0)]).collect();
+    let passes = groove_passes();
     let lift = 0.015;
     let options = VerifyOptions { samples: 20_000, valley_lift_mm: Some(lift), ..VerifyOptions::default() };
     let steep = v_groove(7.0);
@@ -538,8 +542,7 @@ fn facet_valleys_are_where_no_ball_touching_the_facets_reaches() {
 fn the_planners_facet_tree_gives_the_same_verification() {
     // verify_with_faces searches a facet tree it is given instead of building one: the same
     // figures, and a typed error for another surface's tree.
-    let passes: Vec<Vec<DVec3>> =
-        (-12..=12).map(|k| vec![DVec3::new(k as f64, -12.0, R + 2.0), DVec3::new(k as f64, 12.0, R + 2.0)]).collect();
+    let passes = groove_passes();
     let options = VerifyOptions { samples: 20_000, valley_lift_mm: Some(0.015), ..VerifyOptions::default() };
     let steep = v_groove(7.0);
     let faces = FaceTree::new(&steep.positions, &steep.triangles);
