@@ -90,6 +90,21 @@ where
 #[cfg(not(target_arch = "wasm32"))]
 const FIND_INLINE: usize = 8;
 
+/// `v` sorted, on the pool when there are threads and `v` is long. Unstable: only for types
+/// whose equal elements are identical (plain integer keys), so the order is the same either way.
+pub(crate) fn sort_unstable<T: Ord + Send>(v: &mut [T]) {
+    #[cfg(not(target_arch = "wasm32"))]
+    if threads() > 1 && v.len() >= SORT_INLINE {
+        use rayon::slice::ParallelSliceMut;
+        return v.par_sort_unstable();
+    }
+    v.sort_unstable()
+}
+
+/// [`sort_unstable`] sorts fewer items than this inline.
+#[cfg(not(target_arch = "wasm32"))]
+const SORT_INLINE: usize = 1 << 14;
+
 /// `(a(), b())`, side by side on the pool when there are threads.
 pub(crate) fn join<A, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B)
 where

@@ -154,7 +154,7 @@ pub fn interior_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32, u32, u32)> {
         .enumerate()
         .flat_map(|(f, t)| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]), f as u32)))
         .collect();
-    edges.sort_unstable();
+    crate::par::sort_unstable(&mut edges);
     edges
         .windows(2)
         .filter(|e| (e[0].0, e[0].1) == (e[1].0, e[1].1))

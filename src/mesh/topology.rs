@@ -60,7 +60,7 @@ pub fn euler_characteristic(vertices: usize, triangles: &[[u32; 3]]) -> i64 {
         .iter()
         .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
         .collect();
-    edges.sort_unstable();
+    crate::par::sort_unstable(&mut edges);
     edges.dedup();
     vertices as i64 - edges.len() as i64 + triangles.len() as i64
 }
@@ -189,7 +189,7 @@ fn face_neighbours(mesh: &TriMesh) -> Result<(Vec<u32>, usize), MeshError> {
             half.push((a.min(b), a.max(b), (3 * f + k) as u32));
         }
     }
-    half.sort_unstable();
+    crate::par::sort_unstable(&mut half);
     let mut neighbour = vec![NONE; 3 * mesh.triangles.len()];
     let mut edges = 0;
     let mut i = 0;

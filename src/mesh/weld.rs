@@ -61,17 +61,19 @@ pub fn weld(mesh: &TriMesh, tolerance_rel: f64) -> Result<Welded, MeshError> {
     }
 
     // Duplicate faces: sort by the sorted vertex triple, keep the first in file order.
-    let mut order: Vec<u32> = (0..kept.len() as u32).collect();
-    let key = |t: &[u32; 3]| {
-        let mut k = *t;
-        k.sort_unstable();
-        k
-    };
-    order.sort_by_key(|&f| (key(&kept[f as usize]), f));
+    // Keys computed once, not in every comparison.
+    let mut order: Vec<([u32; 3], u32)> = (kept.iter().enumerate())
+        .map(|(f, t)| {
+            let mut k = *t;
+            k.sort_unstable();
+            (k, f as u32)
+        })
+        .collect();
+    crate::par::sort_unstable(&mut order);
     let mut duplicate = vec![false; kept.len()];
     for w in order.windows(2) {
-        if key(&kept[w[0] as usize]) == key(&kept[w[1] as usize]) {
-            duplicate[w[1] as usize] = true;
+        if w[0].0 == w[1].0 {
+            duplicate[w[1].1 as usize] = true;
         }
     }
     let duplicates_dropped = duplicate.iter().filter(|&&d| d).count();
@@ -124,7 +126,7 @@ fn clusters(positions: &[DVec3], origin: DVec3, tolerance: f64) -> Vec<u32> {
     } else {
         let key = |p: DVec3| ((p - origin) / tolerance).floor().as_i64vec3().to_array();
         let mut sorted: Vec<([i64; 3], u32)> = positions.iter().enumerate().map(|(i, &p)| (key(p), i as u32)).collect();
-        sorted.sort_unstable();
+        crate::par::sort_unstable(&mut sorted);
         let tol2 = tolerance * tolerance;
         // Half of the 3×3 column neighbourhood, so every unordered pair of cells is seen once.
         // Offsetting a key preserves the lexicographic order, so each column's lower bound only
