@@ -311,7 +311,7 @@ impl Slit {
     }
     /// Whether angle `theta` (any branch) lies on the slit's angular range.
     pub fn contains_angle(&self, theta: f64) -> bool {
-        let d = (theta - self.theta_start).rem_euclid(TAU);
+        let d = crate::num::rem_tau(theta - self.theta_start);
         d <= self.extent()
     }
 }
@@ -395,7 +395,7 @@ impl SlitMap {
 
 /// Wraps an angle difference into (−π, π].
 fn wrap_pi(a: f64) -> f64 {
-    let r = (a + PI).rem_euclid(TAU) - PI;
+    let r = crate::num::rem_tau(a + PI) - PI;
     if r <= -PI {
         r + TAU
     } else {

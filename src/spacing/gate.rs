@@ -263,7 +263,7 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
         .iter()
         .map(|e| {
             let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
-            b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
+            b.x = a.x + crate::num::rem_tau(b.x - a.x + PI) - PI;
             (e.0, normals(e), a, b, e.1)
         })
         .collect()
@@ -289,7 +289,7 @@ fn tip_points(
             let off = |v: &u32| {
                 let w = map.w[*v as usize];
                 let d = crate::num::atan2(w.y, w.x) - end;
-                (d + PI).rem_euclid(TAU) - PI
+                crate::num::rem_tau(d + PI) - PI
             };
             if let Some(&v) = lp.iter().min_by(|a, b| off(a).abs().total_cmp(&off(b).abs())) {
                 tips.push(v);
@@ -371,7 +371,7 @@ impl RingLine {
         if n < 2 {
             return self.centres.first().is_some_and(|c| c.distance_squared(q) <= r * r);
         }
-        let t = theta.rem_euclid(TAU);
+        let t = crate::num::rem_tau(theta);
         let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
         // The ring closes: centre n − 1 is centre 0, so segments wrap modulo n − 1.
         let m = (n - 1) as isize;

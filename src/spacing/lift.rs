@@ -94,7 +94,7 @@ impl<'a> Lift<'a> {
         if let Some(lifted) = self.in_star(rho, theta, false) {
             return Some(lifted);
         }
-        let x = (theta + PI).rem_euclid(TAU) - PI;
+        let x = crate::num::rem_tau(theta + PI) - PI;
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for shift in [0.0, TAU, -TAU] {
             if shift == 0.0 || self.strip.spans(x + shift) {
@@ -125,7 +125,7 @@ impl<'a> Lift<'a> {
     /// 1 mm jump on plate_holes, where the walk was stopped by the pole star).
     pub fn polar_near(&self, rho: f64, theta: f64, near: u32) -> Option<Lifted> {
         if self.in_star(rho, theta, false).is_none() {
-            let x = (theta + PI).rem_euclid(TAU) - PI;
+            let x = crate::num::rem_tau(theta + PI) - PI;
             let score = |f: usize| {
                 let c = self.corners[f];
                 // Unwrap the query into the face's frame.
@@ -316,7 +316,7 @@ impl PoleStar {
         for (a, b) in rim_edges {
             let (wa, wb) = (map.w[a as usize], map.w[b as usize]);
             let (ta, tb) = (num::arg(wa), num::arg(wb));
-            let span = (tb - ta).rem_euclid(TAU);
+            let span = crate::num::rem_tau(tb - ta);
             if !(span > 1e-12 && span < PI && wa.perp_dot(wb) > 0.0) {
                 return None;
             }
@@ -344,10 +344,10 @@ impl PoleStar {
             DVec2::new(rho * cos, rho * sin)
         } else {
             let &(ta, span, wa, wb) =
-                self.rim.iter().find(|e| (theta - e.0).rem_euclid(TAU) < e.1).unwrap_or_else(|| {
+                self.rim.iter().find(|e| crate::num::rem_tau(theta - e.0) < e.1).unwrap_or_else(|| {
                     self.rim.iter().min_by(|x, y| gap(theta, x).total_cmp(&gap(theta, y))).expect("a rim")
                 });
-            let t = ((theta - ta).rem_euclid(TAU) / span).min(1.0);
+            let t = (crate::num::rem_tau(theta - ta) / span).min(1.0);
             let rim_rho = wa.length() + t * (wb.length() - wa.length());
             let s = rho / rim_rho;
             if !(s <= limit) {
@@ -374,7 +374,7 @@ impl PoleStar {
 /// Angle from the end of rim edge `e` round to `theta` (rounding can leave `theta` just past
 /// the last edge).
 fn gap(theta: f64, e: &(f64, f64, DVec2, DVec2)) -> f64 {
-    ((theta - e.0).rem_euclid(TAU) - e.1).abs()
+    (crate::num::rem_tau(theta - e.0) - e.1).abs()
 }
 
 /// Point location in the log-polar strip. The faces crowd towards some radii (a ring band can

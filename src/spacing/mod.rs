@@ -175,7 +175,7 @@ struct SlitBand {
 
 impl SlitBand {
     fn contains(&self, theta: f64) -> bool {
-        (theta - self.theta_start).rem_euclid(TAU) <= self.extent
+        crate::num::rem_tau(theta - self.theta_start) <= self.extent
     }
 }
 
@@ -370,7 +370,7 @@ fn corner_angles(surface: &Surface, map: &SlitMap) -> Vec<(f64, f64)> {
             let turn = crate::num::atan2(a.cross(b).length(), a.dot(b));
             if turn > CORNER_TURN {
                 let w = map.w[l[(i + 1) % l.len()] as usize];
-                out.push((crate::num::atan2(w.y, w.x).rem_euclid(TAU), w.length()));
+                out.push((crate::num::rem_tau(crate::num::atan2(w.y, w.x)), w.length()));
             }
         }
     }
@@ -399,7 +399,7 @@ fn creases(surface: &Surface, map: &SlitMap) -> Vec<(DVec2, DVec2)> {
         .filter(|&(_, _, f, g)| surface.face_normals[f as usize].dot(surface.face_normals[g as usize]) < cos_turn)
         .map(|(a, b, _, _)| {
             let (a, mut b) = (strip(a), strip(b));
-            b.x = a.x + (b.x - a.x + PI).rem_euclid(TAU) - PI;
+            b.x = a.x + crate::num::rem_tau(b.x - a.x + PI) - PI;
             (a, b)
         })
         .collect()
@@ -840,8 +840,8 @@ impl<'a> Spacer<'a> {
         for s in &self.slits {
             for (t, out) in [(s.theta_start, -1.0), (s.theta_start + s.extent, 1.0)] {
                 for d in offsets_at(&TIP_OFFSETS, hi, s.radius) {
-                    thetas.push((t + out * d).rem_euclid(TAU));
-                    thetas.push((t - out * d).rem_euclid(TAU));
+                    thetas.push(crate::num::rem_tau(t + out * d));
+                    thetas.push(crate::num::rem_tau(t - out * d));
                 }
             }
         }
@@ -850,8 +850,8 @@ impl<'a> Spacer<'a> {
         // corner itself falls between two meridians.
         for &(c, rho) in &self.corners {
             for d in offsets_at(&CORNER_OFFSETS, hi, rho) {
-                thetas.push((c + d).rem_euclid(TAU));
-                thetas.push((c - d).rem_euclid(TAU));
+                thetas.push(crate::num::rem_tau(c + d));
+                thetas.push(crate::num::rem_tau(c - d));
             }
         }
         // Where the band's rings cross a crease (the next ring is expected at most about two
@@ -865,14 +865,14 @@ impl<'a> Spacer<'a> {
             }
             if hi_r - lo_r <= 1e-12 {
                 // Along the rings: its ends and middle.
-                on_crease.extend([a.x, 0.5 * (a.x + b.x), b.x].map(|t| t.rem_euclid(TAU)));
+                on_crease.extend([a.x, 0.5 * (a.x + b.x), b.x].map(crate::num::rem_tau));
                 continue;
             }
             for f in CREASE_DEPTHS {
                 let r = hi - f * depth;
                 if r >= lo_r && r <= hi_r {
                     let t = (r - a.y) / (b.y - a.y);
-                    on_crease.push((a.x + t * (b.x - a.x)).rem_euclid(TAU));
+                    on_crease.push(crate::num::rem_tau(a.x + t * (b.x - a.x)));
                 }
             }
         }
@@ -889,7 +889,7 @@ impl<'a> Spacer<'a> {
             .map(|&t| {
                 on_crease.binary_search_by(|x| x.total_cmp(&t)).is_ok()
                     || self.slits.iter().any(|s| {
-                        let d = |a: f64| ((t - a + PI).rem_euclid(TAU) - PI).abs();
+                        let d = |a: f64| (crate::num::rem_tau(t - a + PI) - PI).abs();
                         d(s.theta_start).min(d(s.theta_start + s.extent)) <= TIP_WINDOW
                     })
             })

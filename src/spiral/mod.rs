@@ -241,7 +241,7 @@ struct SlitU {
 impl SlitU {
     /// Whether angle `u` is within `margin` of the slit's angular range.
     fn blocks(&self, u: f64, margin: f64) -> bool {
-        (u - (self.start - margin)).rem_euclid(TAU) <= self.extent + 2.0 * margin
+        crate::num::rem_tau(u - (self.start - margin)) <= self.extent + 2.0 * margin
     }
 }
 
@@ -466,7 +466,7 @@ fn march(
             if step <= min_step {
                 let rho = piece.rho(u);
                 // arg w in (−π, π]: the build's angle u counts every turn of the spiral.
-                let theta = PI - (PI - sense * u).rem_euclid(TAU);
+                let theta = PI - crate::num::rem_tau(PI - sense * u);
                 let (from_mm, to_mm) = (here.cc.to_array(), pb.cc.to_array());
                 return Err(SpiralError::Discontinuous { rho, theta, gap_mm: chord, from_mm, to_mm });
             }
