@@ -57,7 +57,7 @@ pub fn arg(v: glam::DVec2) -> f64 {
     libm::atan2(v.y, v.x)
 }
 
-/// `x.rem_euclid(TAU)`, bit for bit, without the `fmod` call (a libm routine, 3 % of the
+/// `x.rem_euclid(TAU)`, bit for bit, without the `fmod` call (a libm routine, 2–3 % of the
 /// spacing's time) where `x` lies in (−2π, 4π), as the angles wrapped here do: there `x % 2π` is
 /// `x` or the exact `x − 2π` (Sterbenz), and a negative remainder gets the same rounded `+ 2π`.
 #[inline]

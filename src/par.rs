@@ -2,7 +2,7 @@
 //! results in index order. Every item is computed by the same function of its index alone
 //! (per-job state is scratch only), so the output never depends on the number of threads: plans
 //! stay byte-identical across machines and equal the wasm build's. No floating-point reduction
-//! runs here.
+//! runs here. Long sorts of integer keys run here too: their order is unique.
 //!
 //! The wasm build has no threads: everything runs inline there. Natively the pool has one thread
 //! per core, or `RAYON_NUM_THREADS` (1 turns parallelism off, for single-thread figures).
