@@ -414,13 +414,14 @@ impl Symbolic {
     }
 }
 
-/// `len` zeros, written now. A zeroed allocation (what `vec![0.0; len]` gives, and what the
-/// compiler makes of an allocation followed by a zero fill) maps the shared zero page on first
-/// read, so a `+=` into it faults twice per page, the second time a copy-on-write that stops every
-/// other core to flush its TLB: 6 % of a 40k-face plan's CPU time went there in `factorise`.
+/// `len` zeros, written now. A zeroed allocation (what `vec![0.0; len]` gives) maps the shared
+/// zero page on first read, so a `+=` into it faults twice per page, the second time a
+/// copy-on-write that stops every other core to flush its TLB: 6 % of a 40k-face plan's CPU time
+/// went there in `factorise`.
 fn zeros_written(len: usize) -> Vec<f64> {
     let mut v = Vec::with_capacity(len);
-    // Opaque to the optimiser, which would otherwise fuse the allocation and the fill.
+    // Opaque to the optimiser, which may fold an allocation followed by a zero fill into a
+    // zeroed allocation (LLVM's dead-store elimination does so for malloc + memset).
     std::hint::black_box(v.as_mut_ptr());
     v.resize(len, 0.0);
     v
