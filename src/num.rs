@@ -74,6 +74,17 @@ pub fn rem_tau(x: f64) -> f64 {
     }
 }
 
+/// An angle (or an angle difference) wrapped into (−π, π].
+pub fn wrap_pi(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let r = rem_tau(a + PI) - PI;
+    if r <= -PI {
+        r + TAU
+    } else {
+        r
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -100,7 +100,7 @@ pub(crate) use inverse::{barycentric, clamp_barycentric};
 pub use inverse::{InverseMap, Location};
 
 use crate::linalg::{cotan_weights_2d, mesh_order, LinalgError, SparseCholesky};
-use crate::num;
+use crate::num::{self, wrap_pi};
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
@@ -390,16 +390,6 @@ impl SlitMap {
     /// Spatial index over the image triangles for the inverse map (slit domain → mesh).
     pub fn inverse_map(&self) -> InverseMap {
         InverseMap::new(&self.w, self.triangles.clone())
-    }
-}
-
-/// Wraps an angle difference into (−π, π].
-fn wrap_pi(a: f64) -> f64 {
-    let r = crate::num::rem_tau(a + PI) - PI;
-    if r <= -PI {
-        r + TAU
-    } else {
-        r
     }
 }
 

@@ -36,7 +36,7 @@ use crate::slitmap::{Mode, SlitMap};
 use crate::spacing::{Lift, Rings};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 /// Which way the spiral runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -466,7 +466,7 @@ fn march(
             if step <= min_step {
                 let rho = piece.rho(u);
                 // arg w in (−π, π]: the build's angle u counts every turn of the spiral.
-                let theta = PI - crate::num::rem_tau(PI - sense * u);
+                let theta = num::wrap_pi(sense * u);
                 let (from_mm, to_mm) = (here.cc.to_array(), pb.cc.to_array());
                 return Err(SpiralError::Discontinuous { rho, theta, gap_mm: chord, from_mm, to_mm });
             }
