@@ -62,7 +62,9 @@ pub fn weld(mesh: &TriMesh, tolerance_rel: f64) -> Result<Welded, MeshError> {
 
     // Duplicate faces: sort by the sorted vertex triple, keep the first in file order.
     // Keys computed once, not in every comparison.
-    let mut order: Vec<([u32; 3], u32)> = (kept.iter().enumerate())
+    let mut order: Vec<([u32; 3], u32)> = kept
+        .iter()
+        .enumerate()
         .map(|(f, t)| {
             let mut k = *t;
             k.sort_unstable();

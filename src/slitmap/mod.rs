@@ -311,7 +311,7 @@ impl Slit {
     }
     /// Whether angle `theta` (any branch) lies on the slit's angular range.
     pub fn contains_angle(&self, theta: f64) -> bool {
-        let d = crate::num::rem_tau(theta - self.theta_start);
+        let d = num::rem_tau(theta - self.theta_start);
         d <= self.extent()
     }
 }

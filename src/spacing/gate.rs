@@ -255,15 +255,10 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
     edges.sort_unstable();
     let normals = |&(_, f, ij): &([u32; 2], usize, [usize; 2])| ij.map(|i| surface.corner_normal(f, i));
     edges.dedup_by(|b, a| a.0 == b.0 && normals(a) == normals(b));
-    let strip = |v: u32| {
-        let w = map.w[v as usize];
-        DVec2::new(crate::num::atan2(w.y, w.x), w.length())
-    };
     edges
         .iter()
         .map(|e| {
-            let (a, mut b) = (strip(e.0[0]), strip(e.0[1]));
-            b.x = a.x + crate::num::rem_tau(b.x - a.x + PI) - PI;
+            let (a, b) = super::strip_edge(map, e.0[0], e.0[1]);
             (e.0, normals(e), a, b, e.1)
         })
         .collect()

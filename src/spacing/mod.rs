@@ -389,20 +389,24 @@ const CREASE_DEPTHS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
 /// the ball there, not the interpolated normals), and wavy_mesh_with_hole's worst samples all
 /// lay on its 10–14° creases, between meridians.
 fn creases(surface: &Surface, map: &SlitMap) -> Vec<(DVec2, DVec2)> {
-    let strip = |v: u32| {
-        let w = map.w[v as usize];
-        DVec2::new(crate::num::atan2(w.y, w.x), w.length())
-    };
     let cos_turn = crate::num::cos(CREASE_TURN);
     crate::mesh::geometry::interior_edges(&surface.triangles)
         .into_iter()
         .filter(|&(_, _, f, g)| surface.face_normals[f as usize].dot(surface.face_normals[g as usize]) < cos_turn)
-        .map(|(a, b, _, _)| {
-            let (a, mut b) = (strip(a), strip(b));
-            b.x = a.x + crate::num::rem_tau(b.x - a.x + PI) - PI;
-            (a, b)
-        })
+        .map(|(a, b, _, _)| strip_edge(map, a, b))
         .collect()
+}
+
+/// The log-polar images (arg w, |w|) of the edge from vertex `a` to `b`, the second angle
+/// within π of the first (the edge does not wrap round the strip).
+fn strip_edge(map: &SlitMap, a: u32, b: u32) -> (DVec2, DVec2) {
+    let strip = |v: u32| {
+        let w = map.w[v as usize];
+        DVec2::new(crate::num::atan2(w.y, w.x), w.length())
+    };
+    let (a, mut b) = (strip(a), strip(b));
+    b.x = a.x + crate::num::rem_tau(b.x - a.x + PI) - PI;
+    (a, b)
 }
 
 /// The band above a candidate ring: the meridians tested and ring k's centres near each.

@@ -241,7 +241,7 @@ struct SlitU {
 impl SlitU {
     /// Whether angle `u` is within `margin` of the slit's angular range.
     fn blocks(&self, u: f64, margin: f64) -> bool {
-        crate::num::rem_tau(u - (self.start - margin)) <= self.extent + 2.0 * margin
+        num::rem_tau(u - (self.start - margin)) <= self.extent + 2.0 * margin
     }
 }
 
