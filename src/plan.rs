@@ -71,9 +71,12 @@ pub enum Facets {
     /// ball than the path's chord tolerance as a gouge.
     Exact,
     /// The STL tessellates a smooth surface: the ball rides the interpolated vertex normals and
-    /// may dip into a facet by the facets' own deviation from those normals, R(1 − cos δ), which
-    /// the verifier tolerates ([`facet_tolerance_mm`]). For coarse tessellations of smooth
-    /// parts, where keeping the ball off 10° facets would leave several h at every crease.
+    /// may dip into a facet by the facets' own deviation from those normals, R(1 − cos δ)
+    /// ([`facet_tolerance_mm`]), and no deeper: a centre nearer than R less that to a facet (across
+    /// a concave crease) is moved out until it is not ([`toolpath::clear_facets`]), and the
+    /// verifier counts a sample deeper inside the swept ball than that plus the chord tolerance
+    /// as a gouge. For coarse tessellations of smooth parts, where keeping the ball off 10°
+    /// facets would leave several h at every crease.
     Smooth,
 }
 
@@ -317,19 +320,17 @@ impl Planner {
             ..ToolpathOptions::default()
         };
         let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
-        let cleared = match options.facets {
-            Facets::Exact => {
-                let tolerance = spiral_options.chord_tolerance_mm;
-                let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
-                Some(toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, tolerance))
-            }
-            Facets::Smooth => None,
+        let chord = spiral_options.chord_tolerance_mm;
+        // How deep the ball may dip into the facets: with smooth facets, their own deviation
+        // from the smooth surface they tessellate.
+        let dip = match options.facets {
+            Facets::Exact => 0.0,
+            Facets::Smooth => facet_tolerance_mm(&self.surface, r),
         };
-        let toolpath = match &cleared {
-            Some((contacts, normals, _)) => toolpath::toolpath(contacts, normals, &toolpath_options)?,
-            None => toolpath::toolpath(&designed, &designed_normals, &toolpath_options)?,
-        };
-        let clearance = cleared.map_or(Clearance::default(), |(_, _, c)| c);
+        let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
+        let (contacts, normals, clearance) =
+            toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, dip, chord);
+        let toolpath = toolpath::toolpath(&contacts, &normals, &toolpath_options)?;
         // The designed contact curve: cleared contacts are touch points, which stall on a
         // vertex while the ball rolls over it, so their turning angles say nothing of the motion.
         let path = verify::path_metrics(&designed, options.feed_mm_min);
@@ -359,15 +360,13 @@ impl Planner {
                 radius_mm: r,
                 scallop_mm: options.scallop_mm,
                 samples: options.verify_samples,
-                gouge_tolerance_mm: match options.facets {
-                    // Centres clear every facet; straight moves between them are split where
-                    // they dip deeper than the chord tolerance.
-                    Facets::Exact => spiral_options.chord_tolerance_mm,
-                    Facets::Smooth => facet_tolerance_mm(&self.surface, r).max(spiral_options.chord_tolerance_mm),
-                },
-                // Where the spacing does not plan for the balls' lift off the facets.
-                valley_lift_mm: (options.facets == Facets::Exact)
-                    .then_some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
+                // Centres keep R − dip from every facet; straight moves between them are split
+                // where they dip deeper than the chord tolerance past that.
+                gouge_tolerance_mm: dip + chord,
+                // Where the spacing does not plan for the balls' lift off the facets; the balls
+                // standing for the valleys' reach may dip as deep as the path's.
+                valley_lift_mm: Some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
+                valley_dip_mm: dip,
                 ..VerifyOptions::default()
             };
             Ok(Some(verify::verify_with_faces(self.riding(options.facets), &self.faces, &[centres], &verify_options)?))
@@ -482,8 +481,8 @@ pub struct RejectedPole {
 
 /// How deep a ball placed along the interpolated vertex normal can dip below the plane of the
 /// facet it touches: R(1 − cos δ), δ the largest angle between a face normal and its vertex
-/// normals (at least 1e-4 mm). In [`Facets::Smooth`] this is below the facets' own deviation
-/// from the smooth surface they tessellate, so the verifier counts only deeper penetrations.
+/// normals (at least 1e-4 mm, at most R/10). In [`Facets::Smooth`] this is the facets' own
+/// deviation from the smooth surface they tessellate: the ball may dip that deep, no deeper.
 pub fn facet_tolerance_mm(surface: &Surface, radius_mm: f64) -> f64 {
     let mut cos_min: f64 = 1.0;
     for (f, t) in surface.triangles.iter().enumerate() {

@@ -254,7 +254,7 @@ fn a_smaller_scallop_gives_more_rings_and_bad_options_are_refused() {
 }
 
 /// Plans with `options`, prints the verifier's figures and asserts the promise: max scallop
-/// ≤ 1.02 h, uncovered ≤ 0.1 %, one continuous pass, and no gouge when the facets are exact.
+/// ≤ 1.02 h, uncovered ≤ 0.1 %, one continuous pass, and no gouge.
 fn assert_scallop_kept(name: &str, p: &Planner, options: &PlanOptions) {
     let pl = plan(p, options);
     let v = pl.verification().expect("verified");
@@ -271,9 +271,7 @@ fn assert_scallop_kept(name: &str, p: &Planner, options: &PlanOptions) {
     );
     assert!(v.max_scallop_mm <= 1.02 * h, "{name}: max scallop {} h", v.max_scallop_mm / h);
     assert!(v.uncovered_fraction <= 1e-3, "{name}: uncovered {}", v.uncovered_fraction);
-    if options.facets == Facets::Exact {
-        assert_eq!(v.gouges, 0, "{name}: {} gouges, deepest {} mm", v.gouges, v.max_gouge_mm);
-    }
+    assert_eq!(v.gouges, 0, "{name}: {} gouges, deepest {} mm", v.gouges, v.max_gouge_mm);
     assert_eq!(pl.toolpath.stats.retractions, 1, "{name}");
 }
 
@@ -294,7 +292,9 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // between meridians: 1.45 h and 1.32 h before the spacing tested the creases' crossings.
     // They tessellate smooth shapes coarsely: a ball kept off facets turning 10–14° at this
     // scale left 1.95 h (wavy) and 8.7 h (face) at the creases, so they are planned as smooth
-    // surfaces. (Smooth, the ball dips into face_holes' coarse facets by up to 11.6 µm = 16 h.)
+    // surfaces. Smooth, the ball dipped into face_holes' coarse facets by up to 11.6 µm = 16 h
+    // (248 samples deeper than the facets' own deviation from their normals, which the verifier
+    // tolerates); it is now kept from dipping deeper (0.99 h, no gouge).
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
         let Some((p, diagonal)) = shared_planner(name) else { continue };
         let r = diagonal / 60.0;
@@ -316,7 +316,9 @@ fn issue_4_the_gate_closes_the_gaps_between_meridians() {
     // Between the meridians the spacing tested, plate_holes kept 1.30 h (where the P1 image of
     // its plate overlaps itself below a slit, and at the kinks of rings crossing its long
     // facets) and beetle 1.29 h; the spacing's gate now tests the bands' points between them.
-    for (name, axes) in [("plate_holes.stl", 3), ("beetle.stl", 5)] {
+    // (beetle kept that only by dipping 37 h into the floors of its 70° creases: it is no smooth
+    // surface, see below.)
+    for (name, axes) in [("plate_holes.stl", 3), ("intersection_quads.stl", 5)] {
         let Some((p, diagonal)) = shared_planner(name) else { continue };
         let r = (diagonal / 60.0).min(3.0);
         let options = PlanOptions {
@@ -329,6 +331,41 @@ fn issue_4_the_gate_closes_the_gaps_between_meridians() {
         };
         assert_scallop_kept(name, &p, &options);
     }
+}
+
+#[test]
+fn issue_4_smooth_facets_do_not_gouge_the_floor_of_a_sharp_crease() {
+    // beetle's legs meet its body in concave creases of about 70° at its bench scale. Planned
+    // as a smooth surface, the ball along the bisecting vertex normal dipped 37 h into both
+    // flanks (52 gouges). It may dip only as deep as the facets deviate from their normals
+    // (the verifier's tolerance), so it now stays up to 14 h above the floors, and the verifier
+    // says so.
+    let Some((p, diagonal)) = shared_planner("beetle.stl") else { return };
+    let r = (diagonal / 60.0).min(3.0);
+    let h = (r / 150.0).min(0.02);
+    let options = PlanOptions {
+        radius_mm: r,
+        scallop_mm: h,
+        axes: FIVE_AXIS,
+        post: Post::Cl,
+        facets: Facets::Smooth,
+        ..PlanOptions::default()
+    };
+    let pl = plan(&p, &options);
+    let v = pl.verification().expect("verified");
+    let c = pl.report.path.clearance;
+    println!(
+        "beetle smooth: {} centres moved (max {:.2} h), max {:.2} h, p99 {:.3} h, gouges {}",
+        c.moved,
+        c.max_move_mm / h,
+        v.max_scallop_mm / h,
+        v.p99_scallop_mm / h,
+        v.gouges
+    );
+    assert!(c.moved > 0 && c.unresolved == 0);
+    assert_eq!(v.gouges, 0, "deepest {} h", v.max_gouge_mm / h);
+    assert!(v.max_scallop_mm > 5.0 * h, "the creases' floors: {} h", v.max_scallop_mm / h);
+    assert!(v.p99_scallop_mm < h);
 }
 
 #[test]

@@ -539,6 +539,29 @@ fn facet_valleys_are_where_no_ball_touching_the_facets_reaches() {
 }
 
 #[test]
+fn balls_that_may_dip_into_the_facets_narrow_the_valleys() {
+    // With smooth facets the path's balls may dip into the facets, and so may those standing for
+    // a valley's reach. Resting on both flanks of the 7° groove while dipping d into each, the
+    // ball's centre is (R − d)/cos α above the floor: it leaves 17.5 µm over the floor at d = 5 µm
+    // (still above the 15 µm threshold, on a narrower strip) and 12.4 µm at d = 10 µm (none).
+    let passes = groove_passes();
+    let options = VerifyOptions { samples: 20_000, valley_lift_mm: Some(0.015), ..VerifyOptions::default() };
+    let steep = v_groove(7.0);
+    let touching = verify(&steep, &passes, &options).unwrap();
+    let dipping = verify(&steep, &passes, &VerifyOptions { valley_dip_mm: 0.005, ..options.clone() }).unwrap();
+    let deeper = verify(&steep, &passes, &VerifyOptions { valley_dip_mm: 0.010, ..options.clone() }).unwrap();
+    println!(
+        "valleys: {} mm² touching, {} mm² dipping 5 µm, {} mm² dipping 10 µm",
+        touching.valley_area_mm2, dipping.valley_area_mm2, deeper.valley_area_mm2
+    );
+    assert!(dipping.valley_area_mm2 > 0.0 && dipping.valley_area_mm2 < 0.8 * touching.valley_area_mm2);
+    assert_eq!(deeper.valley_area_mm2, 0.0);
+    // The path and its scallops are the same: only what is excused changes.
+    assert_eq!(deeper.max_scallop_mm, touching.max_scallop_mm);
+    assert_eq!(deeper.max_scallop_outside_valleys_mm, deeper.max_scallop_mm);
+}
+
+#[test]
 fn the_planners_facet_tree_gives_the_same_verification() {
     // verify_with_faces searches a facet tree it is given instead of building one: the same
     // figures, and a typed error for another surface's tree.
@@ -574,6 +597,9 @@ fn bad_input_gives_typed_errors() {
     invalid(VerifyOptions { valley_lift_mm: Some(-1e-3), ..o.clone() });
     invalid(VerifyOptions { valley_lift_mm: Some(R), ..o.clone() });
     invalid(VerifyOptions { valley_lift_mm: Some(f64::NAN), ..o.clone() });
+    invalid(VerifyOptions { valley_dip_mm: -1e-3, ..o.clone() });
+    invalid(VerifyOptions { valley_dip_mm: R, ..o.clone() });
+    invalid(VerifyOptions { valley_dip_mm: f64::NAN, ..o.clone() });
     assert_eq!(verify(&surface, &[], &o), Err(VerifyError::EmptyPath));
     assert_eq!(verify(&surface, &[vec![], vec![]], &o), Err(VerifyError::EmptyPath));
     assert_eq!(verify(&surface, &[vec![DVec3::ZERO], vec![]], &o), Err(VerifyError::EmptyPass { pass: 1 }));

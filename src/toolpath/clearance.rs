@@ -14,6 +14,9 @@
 //! checked whole against the facets ([`FaceTree::segment_nearer_than`]) and split at its
 //! cleared midpoint while it comes nearer than R − the chord tolerance.
 //!
+//! With smooth facets the ball may dip into them by their own deviation from the normals it
+//! rides: the centres then keep R less that from the facets.
+//!
 //! Centres already clear are untouched, bit for bit.
 
 use crate::mesh::nearest::{FaceTree, CLEAR_REL};
@@ -42,20 +45,25 @@ pub struct Clearance {
 pub const MAX_SPLITS: usize = 12;
 
 /// Moves every ball centre `cc[i] + R·normals[i]` out of the facets of `faces` (see the module
-/// docs; `cc_faces[i]`, the face of `cc[i]`, is tried first), then splits each straight move
-/// between two centres that comes nearer than R − `chord_tolerance_mm` to a facet (a chord of a
-/// convex offset, or a move past a feature narrower than the ball) at its cleared midpoint.
-/// Returns the contacts and normals of the new path.
+/// docs; `cc_faces[i]`, the face of `cc[i]`, is tried first) until no facet is nearer than
+/// R − `dip_mm` (0 when the STL is the part; with smooth facets, their own deviation from the
+/// smooth surface they tessellate), then splits each straight move between two centres that
+/// comes nearer than that less `chord_tolerance_mm` to a facet (a chord of a convex offset, or a
+/// move past a feature narrower than the ball) at its cleared midpoint. Returns the contacts
+/// and normals of the new path. Precondition: `0 ≤ dip_mm < R`.
 pub fn clear_facets(
     faces: &FaceTree,
     cc: &[DVec3],
     normals: &[DVec3],
     cc_faces: &[u32],
     radius_mm: f64,
+    dip_mm: f64,
     chord_tolerance_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
     let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
-    let limit = radius_mm - chord_tolerance_mm;
+    // The clearance every centre keeps from the facets.
+    let clear = Clear { radius_mm, keep_mm: radius_mm - dip_mm };
+    let limit = clear.keep_mm - chord_tolerance_mm;
     let centre = |q: (DVec3, DVec3)| q.0 + radius_mm * q.1;
     // Between two centres outside every ball of radius R round a facet point a move enters such
     // a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
@@ -70,12 +78,12 @@ pub fn clear_facets(
     // that no other facet is within R of it (most centres need no more).
     let cleared = crate::par::each(cc.len(), |i| {
         let mut report = Clearance::default();
-        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, radius_mm, &mut report);
-        if i == 0 || !faces.point_nearer_than(centre(b), radius_mm * (1.0 - CLEAR_REL)) {
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, clear, &mut report);
+        if i == 0 || !faces.point_nearer_than(centre(b), clear.keep_mm * (1.0 - CLEAR_REL)) {
             return (b, report);
         }
         let mut report = Clearance::default();
-        (clear_one(faces, cc[i], normals[i], face(i), true, radius_mm, &mut report), report)
+        (clear_one(faces, cc[i], normals[i], face(i), true, clear, &mut report), report)
     });
     // Then each move between two cleared centres (in parallel): the points to append for it,
     // split at cleared midpoints while it dips into a facet.
@@ -105,7 +113,7 @@ pub fn clear_facets(
             }
             let mid = 0.5 * (centre(a) + centre(b));
             let dir = (a.1 + b.1).normalize_or(a.1);
-            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, radius_mm, &mut report);
+            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, clear, &mut report);
             report.inserted += 1;
             pending.push((m, b, depth + 1));
             pending.push((a, m, depth + 1));
@@ -140,6 +148,13 @@ impl Clearance {
     }
 }
 
+/// The ball radius and the distance its centres keep from the facets.
+#[derive(Clone, Copy)]
+struct Clear {
+    radius_mm: f64,
+    keep_mm: f64,
+}
+
 /// One centre `p + R·n` cleared: the new contact and normal.
 fn clear_one(
     faces: &FaceTree,
@@ -147,11 +162,11 @@ fn clear_one(
     n: DVec3,
     face: Option<usize>,
     search: bool,
-    radius_mm: f64,
+    Clear { radius_mm, keep_mm }: Clear,
     report: &mut Clearance,
 ) -> (DVec3, DVec3) {
     let start = p + radius_mm * n;
-    let ball = faces.clear_ball(start, n, radius_mm, face, search);
+    let ball = faces.clear_ball(start, n, keep_mm, face, search);
     report.unresolved += ball.unresolved as usize;
     if ball.rounds == 0 {
         return (p, n);
@@ -199,6 +214,7 @@ mod tests {
             &[DVec3::Z, facet],
             &[0, 1],
             r,
+            0.0,
             1e-3,
         );
         let kept = (DVec3::new(-8.0, 0.0, -8.0 * s), facet);
@@ -218,6 +234,27 @@ mod tests {
     }
 
     #[test]
+    fn a_ball_allowed_to_dip_is_moved_only_past_that_depth() {
+        let (positions, triangles) = ridge();
+        let tree = FaceTree::new(&positions, &triangles);
+        let (r, s) = (3.0, 5f64.to_radians().tan());
+        let facet = DVec3::new(-s, 0.0, 1.0).normalize();
+        let at = |x: f64| DVec3::new(x, 0.0, x * s);
+        // Along the ridge's vertical normal the ball dips R(1 − cos 5°) = 11.4 µm into the left
+        // facet half a millimetre off the ridge: allowed 20 µm, it stays; allowed 5 µm, it keeps
+        // R − 5 µm from the facet's plane.
+        let run = |dip: f64| clear_facets(&tree, &[at(-0.5)], &[DVec3::Z], &[0], r, dip, 1e-3);
+        let (cc, normals, report) = run(0.02);
+        assert_eq!(report.moved, 0);
+        assert_eq!((cc[0], normals[0]), (at(-0.5), DVec3::Z));
+        let (cc, normals, report) = run(0.005);
+        assert_eq!((report.moved, report.unresolved), (1, 0));
+        let centre = cc[0] + r * normals[0];
+        assert!((centre.dot(facet) - (r - 0.005)).abs() < 1e-9, "{}", centre.dot(facet));
+        assert!(tree.nearest(centre, (r - 0.005) * (1.0 - 1e-8)).is_none());
+    }
+
+    #[test]
     fn a_ball_in_a_concave_crease_settles_touching_both_facets() {
         let (mut positions, triangles) = ridge();
         for p in &mut positions {
@@ -226,7 +263,7 @@ mod tests {
         let tree = FaceTree::new(&positions, &triangles);
         let r = 3.0;
         // Right on the crease with the vertical normal, the ball dips into both facets.
-        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 1e-3);
+        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 0.0, 1e-3);
         assert_eq!((report.moved, report.unresolved), (1, 0));
         let centre = cc[0] + r * normals[0];
         // The ball of radius R in a symmetric 170° valley sits over the crease at R / cos 5°,
@@ -250,7 +287,7 @@ mod tests {
         // next one is elsewhere.
         let s = 5f64.to_radians().tan();
         let cc = [DVec3::new(-2e-8, 0.0, 2e-8 * s), DVec3::new(2e-8, 0.0, 2e-8 * s), DVec3::new(0.0, 1.0, 0.0)];
-        let (out, normals, report) = clear_facets(&tree, &cc, &[DVec3::Z; 3], &[], r, 1e-3);
+        let (out, normals, report) = clear_facets(&tree, &cc, &[DVec3::Z; 3], &[], r, 0.0, 1e-3);
         assert_eq!((report.moved, report.merged, out.len()), (3, 1, 2), "{report:?}");
         let centres: Vec<DVec3> = out.iter().zip(&normals).map(|(&p, &n)| p + r * n).collect();
         assert!((centres[1] - centres[0] - DVec3::Y).length() < 1e-6, "{centres:?}");
@@ -269,7 +306,7 @@ mod tests {
         // Two balls resting on either facet 2 mm from the ridge: the move between them passes
         // 0.2 mm inside the ridge's offset cylinder.
         let ends = [DVec3::new(-2.0, 0.0, -2.0 * s), DVec3::new(2.0, 0.0, -2.0 * s)];
-        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], &[0, 3], r, tol);
+        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], &[0, 3], r, 0.0, tol);
         // The ends are clear; every inserted midpoint had to be pushed out.
         assert_eq!((report.moved, report.unresolved), (report.inserted, 0));
         assert!(report.inserted > 2 && cc.len() == 2 + report.inserted, "{report:?}");

@@ -72,13 +72,18 @@ pub struct VerifyOptions {
     /// A sample whose normal meets no ball within this height is uncovered, mm; `None` = R.
     /// Must be > 0.
     pub max_scallop_search_mm: Option<f64>,
-    /// With exact facets: a sample is in a *facet valley* when the balls of radius R that
-    /// touch the facets round it without cutting them (each moved out along its facet's normal
-    /// until clear) leave more than this over it along its normal: no path leaves less there
+    /// A sample is in a *facet valley* when the balls of radius R that touch the facets round
+    /// it without cutting them (each moved out along its facet's normal until clear, or dipping
+    /// [`VerifyOptions::valley_dip_mm`] into them) leave more than this over it along its
+    /// normal: no path leaves less there
     /// (a concave crease sharper than the ball, a groove narrower than it). Their area and the
     /// largest scallop elsewhere are reported apart. `None` (default): no sample is. Must be
     /// finite, ≥ 0 and below R.
     pub valley_lift_mm: Option<f64>,
+    /// How deep the path's balls may dip into the facets, mm (with smooth facets, their own
+    /// deviation from the smooth surface): the balls that stand for a valley's reach may too
+    /// (their centres kept R less this from the facets). Default 0. In [0, R).
+    pub valley_dip_mm: f64,
 }
 
 impl Default for VerifyOptions {
@@ -92,6 +97,7 @@ impl Default for VerifyOptions {
             gouge_tolerance_mm: 1e-4,
             max_scallop_search_mm: None,
             valley_lift_mm: None,
+            valley_dip_mm: 0.0,
         }
     }
 }
@@ -274,6 +280,10 @@ fn check_options(o: &VerifyOptions) -> Result<(f64, f64, f64, f64), VerifyError>
             return bad(format!("valley_lift_mm must be ≥ 0 and below the ball radius {r}, got {lift}"));
         }
     }
+    let dip = o.valley_dip_mm;
+    if !(dip.is_finite() && dip >= 0.0 && dip < r) {
+        return bad(format!("valley_dip_mm must be ≥ 0 and below the ball radius {r}, got {dip}"));
+    }
     let search = o.max_scallop_search_mm.unwrap_or(r);
     if !(search.is_finite() && search > 0.0) {
         return bad(format!("max_scallop_search_mm must be finite and > 0, got {search}"));
@@ -321,8 +331,9 @@ fn verify_on(
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
     let ((f, valley_samples), vertex_probes) = crate::par::join(
         || {
+            let ball = reach::Ball { radius_mm: r, dip_mm: options.valley_dip_mm };
             let valleys =
-                options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, faces, &samples, &probes, r, lift));
+                options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, faces, &samples, &probes, ball, lift));
             let f = sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref());
             (f, valleys.map_or(0, |v| v.iter().filter(|&&x| x).count()))
         },

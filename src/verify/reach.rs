@@ -3,6 +3,8 @@
 //!
 //! A ball touching the mesh at a point q of face g without cutting it has its centre at
 //! q + R·n_g, moved out along n_g until no facet is nearer than R ([`FaceTree::clear_ball`]).
+//! Where the path's balls may dip into the facets by some depth (smooth facets), so may these:
+//! R less that depth in both places.
 //! The union of all such balls is the most any path can cut (the part's opening by the ball);
 //! what it leaves over a sample p along p's normal is p's *reach residual* r*(p). A sample is in
 //! a facet valley when r*(p) exceeds the valley lift: no path leaves less there.
@@ -25,18 +27,35 @@ use std::collections::HashMap;
 /// Contacts of the balls standing for the union are at most this many R apart.
 pub const GRID_SPACING: f64 = 0.05;
 
-/// Per sample, whether it lies in a facet valley: whether the balls of radius `r` touching the
-/// facets round it leave more than `lift_mm` over it along its normal (see the module docs).
-/// `probes` are the path's probes of `samples`; `faces`, the facet tree of `surface` when the
-/// caller has one (built here only when some sample needs it). Preconditions: `0 ≤ lift_mm < r`.
+/// The balls that stand for the union: radius R, and how deep they may dip into the facets
+/// (their centres kept R − dip from every facet; 0 when the STL is the part).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Ball {
+    pub radius_mm: f64,
+    pub dip_mm: f64,
+}
+
+impl Ball {
+    /// The distance the centres keep from the facets.
+    fn keep_mm(self) -> f64 {
+        self.radius_mm - self.dip_mm
+    }
+}
+
+/// Per sample, whether it lies in a facet valley: whether the balls `ball` touching the facets
+/// round it leave more than `lift_mm` over it along its normal (see the module docs). `probes`
+/// are the path's probes of `samples`; `faces`, the facet tree of `surface` when the caller has
+/// one (built here only when some sample needs it). Preconditions: `0 ≤ lift_mm < R`,
+/// `0 ≤ dip < R`.
 pub(super) fn facet_valleys(
     surface: &Surface,
     faces: Option<&FaceTree>,
     samples: &[SurfaceSample],
     probes: &[Probe],
-    r: f64,
+    ball: Ball,
     lift_mm: f64,
 ) -> Vec<bool> {
+    let (r, keep) = (ball.radius_mm, ball.keep_mm());
     let mut valley = vec![false; samples.len()];
     // r*(p) ≤ scallop(p): the path's balls touch the part too (an uncovered sample may be in a
     // groove no ball enters).
@@ -56,7 +75,7 @@ pub(super) fn facet_valleys(
     let own = crate::par::each(deep.len(), |k| {
         let s = &samples[deep[k]];
         let n = surface.face_normals[s.face as usize];
-        let ball = faces.clear_ball(s.position + r * n, n, r, Some(s.face as usize), true);
+        let ball = faces.clear_ball(s.position + keep * n, n, keep, Some(s.face as usize), true);
         if ball.unresolved {
             return f64::INFINITY;
         }
@@ -75,7 +94,7 @@ pub(super) fn facet_valleys(
         return valley;
     }
     let near = Near::new(measured.iter().map(|&(i, bound)| (samples[i].position, bound)), r);
-    let balls = touching_balls(surface, faces, &near, r);
+    let balls = touching_balls(surface, faces, &near, ball);
     let residual: Vec<f64> = match SweptVolume::new(&balls, r) {
         Ok(volume) => crate::par::map(
             measured.len(),
@@ -102,7 +121,8 @@ pub(super) fn facet_valleys(
 /// least over a valley's floor (the grid's next contact may be a spacing away from it, which
 /// would overstate the residual there to first order). One pass of one centre each, in face
 /// order.
-fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, r: f64) -> Vec<Vec<DVec3>> {
+fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, ball: Ball) -> Vec<Vec<DVec3>> {
+    let (r, keep) = (ball.radius_mm, ball.keep_mm());
     let per_face = crate::par::each(surface.triangles.len(), |g| {
         let [a, b, c] = surface.triangles[g].map(|v| surface.positions[v as usize]);
         let middle = (a + b + c) / 3.0;
@@ -117,7 +137,7 @@ fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, r: f64) -> V
         // cannot reach a sample (its contact within 2R + b of p, and its centre, which moves out
         // along n from q + R·n, within R + b) or cannot clear the facets.
         let ball = |q: DVec3| {
-            let u = q + r * n;
+            let u = q + keep * n;
             let may_reach = |&(p, b): &(DVec3, f64)| {
                 let v = p - u;
                 p.distance_squared(q) <= (2.0 * r + b) * (2.0 * r + b)
@@ -126,7 +146,7 @@ fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, r: f64) -> V
             if !around.iter().any(may_reach) {
                 return None;
             }
-            let ball = faces.clear_ball(u, n, r, Some(g), true);
+            let ball = faces.clear_ball(u, n, keep, Some(g), true);
             (!ball.unresolved).then_some((ball.centre, ball.centre != u))
         };
         let reaches = |centre: DVec3| around.iter().any(|&(p, b)| p.distance_squared(centre) <= (r + b) * (r + b));

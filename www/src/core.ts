@@ -82,7 +82,8 @@ export interface PlanOptions {
   partName?: string;
   /**
    * "exact" (default): the STL is the part, the ball never enters a facet. "smooth": the STL
-   * tessellates a smooth surface, the ball follows the vertex normals.
+   * tessellates a smooth surface, the ball follows the vertex normals and dips into the facets
+   * no deeper than they deviate from them.
    */
   facets?: "exact" | "smooth";
 }
@@ -110,7 +111,7 @@ export interface PlanReport {
     max_turn_deg: number;
     rho2: number;
     time_min: number;
-    /** Ball centres moved off the facets (zeros with `facets: "smooth"`). */
+    /** Ball centres moved off the facets (with `facets: "smooth"`, only those dipping deeper than the facets' own deviation from their normals). */
     clearance: { moved: number; max_move_mm: number; inserted: number; unresolved: number; merged: number };
   };
   verify: {

@@ -41,7 +41,8 @@ function rows(plan: PlanResult, limit: number): Row[] {
       "Ball lifted off facets",
       `${n0.format(path.clearance.moved)} centres, up to ${mm(path.clearance.max_move_mm)}`,
       // Lifted by more than h/2 the ball leaves visible cusps where facets meet: the STL is
-      // coarse for this h (facets "smooth" follows the vertex normals instead).
+      // coarse for this h (facets "smooth" follows the vertex normals instead, and is lifted
+      // only out of creases sharper than the facets' own deviation from them).
       path.clearance.max_move_mm > 0.5 * limit || path.clearance.unresolved > 0,
     ],
     ["metric-gouge-risk", "Gouge-risk area", `${n3.format(report.gouge_risk_area_mm2)} mm²`, report.gouge_risk_area_mm2 > 0],
