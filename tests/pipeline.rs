@@ -294,7 +294,7 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // scale left 1.95 h (wavy) and 8.7 h (face) at the creases, so they are planned as smooth
     // surfaces. Smooth, the ball dipped into face_holes' coarse facets by up to 11.6 µm = 16 h
     // (248 samples deeper than the facets' own deviation from their normals, which the verifier
-    // tolerates); it is now kept from dipping deeper (0.99 h, no gouge).
+    // tolerates); it is now kept from dipping deeper (0.93 h, no gouge).
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
         let Some((p, diagonal)) = shared_planner(name) else { continue };
         let r = diagonal / 60.0;
