@@ -6,8 +6,8 @@
 //! (where the scallop jumps), and where the image overlaps itself below a slit tip (a region the
 //! rings skip), and round the ends of holes, where the rings turn. So the points tested are
 //! points along every edge in the band, along lines |w| = const across every face of it (at
-//! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on a fine polar grid round each
-//! hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
+//! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on a fine
+//! polar grid round each hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
 //! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
 //! such gaps at up to 1.3 h on the shared meshes). With exact facets each point is first taken
 //! lower by the lift the spacing plans for a ball touching there (see `Spacer::lift_mm`).
@@ -21,9 +21,9 @@ use std::f64::consts::{PI, TAU};
 /// Lines of a band are at most this many R apart on the surface.
 const STRIP: f64 = 0.25;
 /// A band is split into at least this many strips by its lines. The scallop between two rings
-/// peaks in a V along their cusp (its flanks slope by about √(2h/R)), so a level an
-/// eighth of the band off the cusp passes up to h/2 below the peak, a sixteenth h/4: with 4
-/// strips halftunnel kept 1.05 h (smooth) between its meridians, with 8 0.98 h.
+/// peaks in a V along their cusp (its flanks slope by about √(2h/R)), so a level an eighth of
+/// the band off the cusp passes up to h/2 below the peak, a sixteenth h/4: with 4 strips
+/// halftunnel kept 1.05 h (smooth) between its meridians, with 8 0.98 h.
 const MIN_STRIPS: f64 = 8.0;
 /// With lifted balls the points are lowered by an estimate good to a few tenths of h, and finer
 /// levels did not help (the shared meshes' largest scallops moved both ways): 4 strips.
@@ -139,8 +139,9 @@ impl<'a> Gate<'a> {
 
     /// The points of the band between rings `lo` < `hi` where its scallop may peak, that
     /// `cutter` leaves uncut: lines |w| = const across every face, splitting the band into
-    /// [`MIN_STRIPS`] strips or more where it is wide on the surface (near a slit tip the map squeezes a wide
-    /// region into a thin band), each at most [`STRIP`]·R wide; points along every edge within
+    /// [`MIN_STRIPS`] strips ([`MIN_STRIPS_LIFTED`] with lifted balls) or more where it is wide on
+    /// the surface (near a slit tip the map squeezes a wide region into a thin band), each at
+    /// most [`STRIP`]·R wide; points along every edge within
     /// the band; and the band's points round the ends of holes. Made and tested in chunks on the
     /// pool (a band has thousands), kept in order: the same points on any number of threads.
     pub(super) fn uncut(&self, lo: f64, hi: f64, cutter: &Cutter<'_>) -> Vec<GatePoint> {

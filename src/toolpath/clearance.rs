@@ -60,6 +60,7 @@ pub fn clear_facets(
     dip_mm: f64,
     chord_tolerance_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
+    debug_assert!((0.0..radius_mm).contains(&dip_mm), "dip {dip_mm} mm with R {radius_mm} mm");
     let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
     // The clearance every centre keeps from the facets.
     let clear = Clear { radius_mm, keep_mm: radius_mm - dip_mm };
