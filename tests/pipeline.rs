@@ -33,6 +33,20 @@ fn shared_planner(name: &str) -> Option<(Planner, f64)> {
 /// 5-axis, for the walls of the shared meshes at their own scale.
 const FIVE_AXIS: slitpath::toolpath::Axes = slitpath::toolpath::Axes::Five { lead_deg: 15.0, tilt_deg: 0.0 };
 
+/// The plan bench's options for a shared mesh at its own scale (bounding-box `diagonal`):
+/// R = diagonal / 60 up to 3 mm, h = R / 150 up to 0.02 mm, 5-axis, CL data, with `facets`.
+fn bench_options(diagonal: f64, facets: Facets) -> PlanOptions {
+    let r = (diagonal / 60.0).min(3.0);
+    PlanOptions {
+        radius_mm: r,
+        scallop_mm: (r / 150.0).min(0.02),
+        axes: FIVE_AXIS,
+        post: Post::Cl,
+        facets,
+        ..PlanOptions::default()
+    }
+}
+
 fn plan(p: &Planner, options: &PlanOptions) -> Plan {
     p.plan(options, &mut |_, _, _| {}, &|| 0.0).expect("plan")
 }
@@ -297,16 +311,7 @@ fn issue_4_shared_meshes_keep_the_scallop_on_their_creases() {
     // tolerates); it is now kept from dipping deeper (0.93 h, no gouge).
     for name in ["wavy_mesh_with_hole.stl", "face_holes.stl"] {
         let Some((p, diagonal)) = shared_planner(name) else { continue };
-        let r = diagonal / 60.0;
-        let options = PlanOptions {
-            radius_mm: r,
-            scallop_mm: r / 150.0,
-            axes: FIVE_AXIS,
-            post: Post::Cl,
-            facets: Facets::Smooth,
-            ..PlanOptions::default()
-        };
-        assert_scallop_kept(name, &p, &options);
+        assert_scallop_kept(name, &p, &bench_options(diagonal, Facets::Smooth));
     }
 }
 
@@ -320,15 +325,8 @@ fn issue_4_the_gate_closes_the_gaps_between_meridians() {
     // surface, see below.)
     for (name, axes) in [("plate_holes.stl", 3), ("intersection_quads.stl", 5)] {
         let Some((p, diagonal)) = shared_planner(name) else { continue };
-        let r = (diagonal / 60.0).min(3.0);
-        let options = PlanOptions {
-            radius_mm: r,
-            scallop_mm: (r / 150.0).min(0.02),
-            axes: if axes == 5 { FIVE_AXIS } else { Default::default() },
-            post: Post::Cl,
-            facets: Facets::Smooth,
-            ..PlanOptions::default()
-        };
+        let smooth = bench_options(diagonal, Facets::Smooth);
+        let options = PlanOptions { axes: if axes == 5 { FIVE_AXIS } else { Default::default() }, ..smooth };
         assert_scallop_kept(name, &p, &options);
     }
 }
@@ -341,16 +339,8 @@ fn issue_4_smooth_facets_do_not_gouge_the_floor_of_a_sharp_crease() {
     // (the verifier's tolerance), so it now stays up to 14 h above the floors, and the verifier
     // says so.
     let Some((p, diagonal)) = shared_planner("beetle.stl") else { return };
-    let r = (diagonal / 60.0).min(3.0);
-    let h = (r / 150.0).min(0.02);
-    let options = PlanOptions {
-        radius_mm: r,
-        scallop_mm: h,
-        axes: FIVE_AXIS,
-        post: Post::Cl,
-        facets: Facets::Smooth,
-        ..PlanOptions::default()
-    };
+    let options = bench_options(diagonal, Facets::Smooth);
+    let h = options.scallop_mm;
     let pl = plan(&p, &options);
     let v = pl.verification().expect("verified");
     let c = pl.report.path.clearance;
@@ -415,14 +405,12 @@ fn issue_4_exact_facets_ride_the_flat_of_a_cad_part_flat() {
     assert_eq!(v.gouges, 0);
 }
 
-/// Plans the shared mesh `name` with exact facets at the bench's scale (R = diagonal / 60,
-/// h = R / 150, 5-axis) and prints its facet-valley figures: the verification, h and the
-/// valleys' share of the area; `None` when the mesh is absent.
+/// Plans the shared mesh `name` with exact facets at the bench's scale ([`bench_options`]) and
+/// prints its facet-valley figures: the verification, h and the valleys' share of the area;
+/// `None` when the mesh is absent.
 fn exact_valleys_at_bench_scale(name: &str) -> Option<(slitpath::verify::Verification, f64, f64)> {
     let (p, diagonal) = shared_planner(name)?;
-    let r = diagonal / 60.0;
-    let options =
-        PlanOptions { radius_mm: r, scallop_mm: r / 150.0, axes: FIVE_AXIS, post: Post::Cl, ..PlanOptions::default() };
+    let options = bench_options(diagonal, Facets::Exact);
     let v = plan(&p, &options).verification().expect("verified").clone();
     let h = options.scallop_mm;
     let share = v.valley_area_mm2 / p.surface.area();

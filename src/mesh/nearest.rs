@@ -214,6 +214,23 @@ impl FaceTree {
     }
 }
 
+/// A ball of radius R whose centre is kept R − `dip_mm` from every facet: it touches the facets
+/// without cutting them when the dip is 0, and may enter them by the dip otherwise (smooth
+/// facets, which may deviate that much from the surface they tessellate).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DippingBall {
+    pub radius_mm: f64,
+    pub dip_mm: f64,
+}
+
+impl DippingBall {
+    /// The distance its centre keeps from the facets, R − dip: the radius to clear it by
+    /// ([`FaceTree::clear_ball`]).
+    pub fn keep_mm(self) -> f64 {
+        self.radius_mm - self.dip_mm
+    }
+}
+
 /// Where [`FaceTree::clear_ball`] left a ball.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClearBall {

@@ -19,7 +19,7 @@
 //!
 //! Centres already clear are untouched, bit for bit.
 
-use crate::mesh::nearest::{FaceTree, CLEAR_REL};
+use crate::mesh::nearest::{DippingBall, FaceTree, CLEAR_REL};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -62,9 +62,8 @@ pub fn clear_facets(
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
     debug_assert!((0.0..radius_mm).contains(&dip_mm), "dip {dip_mm} mm with R {radius_mm} mm");
     let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
-    // The clearance every centre keeps from the facets.
-    let clear = Clear { radius_mm, keep_mm: radius_mm - dip_mm };
-    let limit = clear.keep_mm - chord_tolerance_mm;
+    let ball = DippingBall { radius_mm, dip_mm };
+    let limit = ball.keep_mm() - chord_tolerance_mm;
     let centre = |q: (DVec3, DVec3)| q.0 + radius_mm * q.1;
     // Between two centres outside every ball of radius R round a facet point a move enters such
     // a ball by at most R − √(R² − L²/4) ≈ L²/8R: short ones cannot dip.
@@ -79,12 +78,12 @@ pub fn clear_facets(
     // that no other facet is within R of it (most centres need no more).
     let cleared = crate::par::each(cc.len(), |i| {
         let mut report = Clearance::default();
-        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, clear, &mut report);
-        if i == 0 || !faces.point_nearer_than(centre(b), clear.keep_mm * (1.0 - CLEAR_REL)) {
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report);
+        if i == 0 || !faces.point_nearer_than(centre(b), ball.keep_mm() * (1.0 - CLEAR_REL)) {
             return (b, report);
         }
         let mut report = Clearance::default();
-        (clear_one(faces, cc[i], normals[i], face(i), true, clear, &mut report), report)
+        (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
     });
     // Then each move between two cleared centres (in parallel): the points to append for it,
     // split at cleared midpoints while it dips into a facet.
@@ -114,7 +113,7 @@ pub fn clear_facets(
             }
             let mid = 0.5 * (centre(a) + centre(b));
             let dir = (a.1 + b.1).normalize_or(a.1);
-            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, clear, &mut report);
+            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, ball, &mut report);
             report.inserted += 1;
             pending.push((m, b, depth + 1));
             pending.push((a, m, depth + 1));
@@ -149,13 +148,6 @@ impl Clearance {
     }
 }
 
-/// The ball radius and the distance its centres keep from the facets.
-#[derive(Clone, Copy)]
-struct Clear {
-    radius_mm: f64,
-    keep_mm: f64,
-}
-
 /// One centre `p + R·n` cleared: the new contact and normal.
 fn clear_one(
     faces: &FaceTree,
@@ -163,11 +155,12 @@ fn clear_one(
     n: DVec3,
     face: Option<usize>,
     search: bool,
-    Clear { radius_mm, keep_mm }: Clear,
+    kept: DippingBall,
     report: &mut Clearance,
 ) -> (DVec3, DVec3) {
+    let radius_mm = kept.radius_mm;
     let start = p + radius_mm * n;
-    let ball = faces.clear_ball(start, n, keep_mm, face, search);
+    let ball = faces.clear_ball(start, n, kept.keep_mm(), face, search);
     report.unresolved += ball.unresolved as usize;
     if ball.rounds == 0 {
         return (p, n);

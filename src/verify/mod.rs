@@ -49,7 +49,7 @@ pub use reach::GRID_SPACING;
 pub use swept::{count_runs, Probe, Prober, SweptVolume};
 
 use crate::fixtures::SplitMix64;
-use crate::mesh::nearest::FaceTree;
+use crate::mesh::nearest::{DippingBall, FaceTree};
 use crate::mesh::Surface;
 use glam::DVec3;
 use serde::Serialize;
@@ -331,7 +331,7 @@ fn verify_on(
     let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
     let ((f, valley_samples), vertex_probes) = crate::par::join(
         || {
-            let ball = reach::Ball { radius_mm: r, dip_mm: options.valley_dip_mm };
+            let ball = DippingBall { radius_mm: r, dip_mm: options.valley_dip_mm };
             let valleys =
                 options.valley_lift_mm.map(|lift| reach::facet_valleys(surface, faces, &samples, &probes, ball, lift));
             let f = sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref());

@@ -19,7 +19,7 @@
 //! exceed the lift are measured against the balls (none on the analytic fixtures).
 
 use super::{Capsule, Probe, SurfaceSample, SweptVolume};
-use crate::mesh::nearest::FaceTree;
+use crate::mesh::nearest::{DippingBall, FaceTree};
 use crate::mesh::Surface;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -27,22 +27,7 @@ use std::collections::HashMap;
 /// Contacts of the balls standing for the union are at most this many R apart.
 pub const GRID_SPACING: f64 = 0.05;
 
-/// The balls that stand for the union: radius R, and how deep they may dip into the facets
-/// (their centres kept R − dip from every facet; 0 when the STL is the part).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Ball {
-    pub radius_mm: f64,
-    pub dip_mm: f64,
-}
-
-impl Ball {
-    /// The distance the centres keep from the facets.
-    fn keep_mm(self) -> f64 {
-        self.radius_mm - self.dip_mm
-    }
-}
-
-/// Per sample, whether it lies in a facet valley: whether the balls `ball` touching the facets
+/// Per sample, whether it lies in a facet valley: whether balls like `ball` touching the facets
 /// round it leave more than `lift_mm` over it along its normal (see the module docs). `probes`
 /// are the path's probes of `samples`; `faces`, the facet tree of `surface` when the caller has
 /// one (built here only when some sample needs it). Preconditions: `0 ≤ lift_mm < R`,
@@ -52,7 +37,7 @@ pub(super) fn facet_valleys(
     faces: Option<&FaceTree>,
     samples: &[SurfaceSample],
     probes: &[Probe],
-    ball: Ball,
+    ball: DippingBall,
     lift_mm: f64,
 ) -> Vec<bool> {
     let (r, keep) = (ball.radius_mm, ball.keep_mm());
@@ -121,7 +106,7 @@ pub(super) fn facet_valleys(
 /// least over a valley's floor (the grid's next contact may be a spacing away from it, which
 /// would overstate the residual there to first order). One pass of one centre each, in face
 /// order.
-fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, ball: Ball) -> Vec<Vec<DVec3>> {
+fn touching_balls(surface: &Surface, faces: &FaceTree, near: &Near, ball: DippingBall) -> Vec<Vec<DVec3>> {
     let (r, keep) = (ball.radius_mm, ball.keep_mm());
     let per_face = crate::par::each(surface.triangles.len(), |g| {
         let [a, b, c] = surface.triangles[g].map(|v| surface.positions[v as usize]);
