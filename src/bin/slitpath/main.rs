@@ -246,12 +246,14 @@ mod cli {
             }
             Command::Fixture { list: true, .. } => {
                 fixtures::NAMES.iter().for_each(|n| println!("{n}"));
+                println!("gen:SEED[:FACES]  (a generated part: outline, relief, holes and meshing drawn from SEED)");
                 Ok(())
             }
             Command::Fixture { name, output, .. } => {
                 let (name, output) = (name.expect("required by clap"), output.expect("required by clap"));
-                let mesh = fixtures::by_name(&name)
-                    .ok_or_else(|| format!("unknown fixture `{name}`; known: {}", fixtures::NAMES.join(", ")))?;
+                let mesh = fixtures::by_name(&name).ok_or_else(|| {
+                    format!("unknown fixture `{name}`; known: {}, gen:SEED[:FACES]", fixtures::NAMES.join(", "))
+                })?;
                 write(&output, &mesh::stl::write_binary(&mesh, &format!("slitpath fixture {name}")))
             }
         }
