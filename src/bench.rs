@@ -359,11 +359,14 @@ pub fn format_verify(f: &VerifyFigures) -> String {
 }
 
 /// The whole pipeline on one part of machining size at R = 3 mm, h = 0.02 mm, 3-axis: faces,
-/// holes, rings, path length, max scallop / h (everywhere and outside the facet valleys), p99
-/// scallop / h, gouges and each stage's time (from the plan report), for
-/// `cargo bench --bench plan` and its wasm twin.
+/// holes, rings, path length (and over the flat-plate bound), max scallop / h (everywhere and
+/// outside the facet valleys), p99 scallop / h, gouges and each stage's time (from the plan
+/// report), for `cargo bench --bench plan` and its wasm twin. Two rows: the optimised field (the
+/// default) and the conformal map's circles.
 pub fn run_plan(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Result<String, String> {
-    plan_row(name, part, false, Facets::Exact, now)
+    let optimised = plan_row(name, part, false, Facets::Exact, now)?;
+    let conformal = plan_row_with("  (conformal)", part, false, Facets::Exact, crate::plan::Optimise::None, now)?;
+    Ok(format!("{optimised}\n{conformal}"))
 }
 
 /// [`run_plan`] for the shared meshes, most of them unit-scale 3D shapes: where a sixtieth of the
@@ -378,12 +381,23 @@ pub fn run_plan_scaled(name: &str, part: &TriMesh, now: &dyn Fn() -> f64) -> Res
 }
 
 fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn Fn() -> f64) -> Result<String, String> {
+    plan_row_with(name, part, scaled, facets, crate::plan::Optimise::Tpsfo, now)
+}
+
+fn plan_row_with(
+    name: &str,
+    part: &TriMesh,
+    scaled: bool,
+    facets: Facets,
+    optimise: crate::plan::Optimise,
+    now: &dyn Fn() -> f64,
+) -> Result<String, String> {
     let t = now();
     let out = mesh::from_triangles(part, &MeshOptions::default()).map_err(|e| e.to_string())?;
     let read = now() - t;
     let holes = out.surface.loops.len().saturating_sub(1);
     let (lo, hi) = crate::mesh::weld::bounding_box(&out.surface.positions);
-    let mut options = crate::plan::PlanOptions { facets, ..crate::plan::PlanOptions::default() };
+    let mut options = crate::plan::PlanOptions { facets, optimise, ..crate::plan::PlanOptions::default() };
     if scaled {
         options.radius_mm = options.radius_mm.min((hi - lo).length() / 60.0);
         options.scallop_mm = options.radius_mm / 150.0;
@@ -400,12 +414,13 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn 
         (v.max_scallop_mm / h, v.max_scallop_outside_valleys_mm / h, v.p99_scallop_mm / h, v.gouges)
     });
     Ok(format!(
-        "{:<24} {:>7} {:>5} {:>5} {:>9.0} {:>6.2} {:>5.2} {:>5.2} {:>6} | {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>7.0}",
+        "{:<24} {:>7} {:>5} {:>5} {:>9.0} {:>6.3} {:>6.2} {:>5.2} {:>5.2} {:>6} | {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.0} {:>6.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>7.0}",
         name,
         r.mesh.machined.as_ref().map_or(r.mesh.faces, |m| m.faces),
         holes,
         r.rings,
         r.path.length_mm,
+        r.path.length_over_ideal,
         ratio,
         outside,
         p99,
@@ -414,6 +429,7 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn 
         t.flatten,
         t.slitmap,
         t.origin,
+        t.optimise,
         t.spacing,
         t.spiral,
         t.toolpath,
@@ -423,7 +439,7 @@ fn plan_row(name: &str, part: &TriMesh, scaled: bool, facets: Facets, now: &dyn 
     ))
 }
 
-pub const PLAN_HEADER: &str = "case                       faces holes rings length mm  max/h out/h p99/h gouges |  read  flat  slit origin spacng spiral  tool verify  post   total (ms)";
+pub const PLAN_HEADER: &str = "case                       faces holes rings length mm  /ideal  max/h out/h p99/h gouges |  read  flat  slit origin optim spacng spiral  tool verify  post   total (ms)";
 
 /// The analytic parts of the pipeline benchmark, and issue 5's 40k- and 300k-face parts with 6
 /// holes: those whose name contains `only` ("" for all). Only those are built (the 300k part
@@ -491,4 +507,121 @@ mod tests {
         assert_eq!(f.uncovered_samples, 0);
         assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
     }
+}
+
+/// One row of the length table (issue 32): a generated part planned with the conformal map's
+/// rings and with seed 003's optimised field, the same R and h, each verified.
+#[derive(Debug, Clone, Serialize)]
+pub struct LengthFigures {
+    pub name: String,
+    pub faces: usize,
+    pub radius_mm: f64,
+    pub scallop_mm: f64,
+    pub conformal: PathFigures,
+    pub optimised: PathFigures,
+    /// `tpsfo`, or `conformal` where the planner kept the conformal map's path.
+    pub path_field: String,
+    pub optimise_ms: f64,
+}
+
+/// A verified path's figures at equal finish (DESIGN.md "Path length at equal finish").
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct PathFigures {
+    /// Length over the flat-plate bound area / (2·√(2Rh)).
+    pub length_over_ideal: f64,
+    pub max_over_h: f64,
+    pub median_over_h: f64,
+    /// Seed 003 eq. 34 over the area: the mean CT², and the largest CT.
+    pub ct2_mean: f64,
+    pub max_ct: u32,
+    /// Seed 003 eq. 33, mm⁻¹.
+    pub rho2: f64,
+}
+
+/// The parts of the length table: generated parts of seeds `0..count` (5k–40k faces).
+pub fn length_parts(count: u64) -> impl Iterator<Item = fixtures::generated::GeneratedPart> {
+    (0..count).map(|seed| fixtures::generated::part(seed, fixtures::generated::BENCH_FACES))
+}
+
+/// Plans `part` both ways with its own R and h (100 000 verifier samples each).
+pub fn run_length(part: &fixtures::generated::GeneratedPart, now: &dyn Fn() -> f64) -> Result<LengthFigures, String> {
+    let out = mesh::from_triangles(&part.mesh, &MeshOptions::default()).map_err(|e| e.to_string())?;
+    let faces = out.surface.triangles.len();
+    let planner = crate::plan::Planner::new(out, now).map_err(|e| format!("flatten/slit map: {e}"))?;
+    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
+    let run = |optimise| -> Result<(PathFigures, String, f64), String> {
+        let options = crate::plan::PlanOptions { radius_mm: r, scallop_mm: h, optimise, ..Default::default() };
+        let plan = planner.plan(&options, &mut |_, _, _| {}, now).map_err(|e| e.to_string())?;
+        let report = &plan.report;
+        let v = report.verify.as_ref().ok_or("not verified")?;
+        let figures = PathFigures {
+            length_over_ideal: report.path.length_over_ideal,
+            max_over_h: v.max_scallop_mm / h,
+            median_over_h: v.median_scallop_mm / h,
+            ct2_mean: v.ct2 / planner.surface.area(),
+            max_ct: v.max_ct,
+            rho2: report.path.rho2,
+        };
+        let field = report.optimise.as_ref().map_or("conformal", |o| o.path_field).to_string();
+        Ok((figures, field, report.timings_ms.optimise))
+    };
+    let (conformal, _, _) = run(crate::plan::Optimise::None)?;
+    let (optimised, path_field, optimise_ms) = run(crate::plan::Optimise::Tpsfo)?;
+    Ok(LengthFigures {
+        name: part.name.clone(),
+        faces,
+        radius_mm: r,
+        scallop_mm: h,
+        conformal,
+        optimised,
+        path_field,
+        optimise_ms,
+    })
+}
+
+pub const LENGTH_HEADER: &str = "part                                        faces    R      h    | conformal: len/ideal max/h  med/h  CT²  maxCT ρ²    | optimised: len/ideal max/h  med/h  CT²  maxCT ρ²     field   opt ms";
+
+pub fn format_length(f: &LengthFigures) -> String {
+    let cells = |p: &PathFigures| {
+        format!(
+            "{:>9.3} {:>5.2} {:>6.3} {:>5.1} {:>4} {:>6.0}",
+            p.length_over_ideal, p.max_over_h, p.median_over_h, p.ct2_mean, p.max_ct, p.rho2
+        )
+    };
+    format!(
+        "{:<42} {:>6} {:>5.2} {:>6.4} |        {} |        {}  {:<9} {:>5.0}",
+        f.name,
+        f.faces,
+        f.radius_mm,
+        f.scallop_mm,
+        cells(&f.conformal),
+        cells(&f.optimised),
+        f.path_field,
+        f.optimise_ms
+    )
+}
+
+/// The table's summary: medians of length over ideal both ways, the largest optimised one, the
+/// median of the optimised median scallop, the parts that kept the conformal path, and those that
+/// could not be planned.
+pub fn summarise_lengths(rows: &[LengthFigures], failed: usize) -> String {
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.sort_by(f64::total_cmp);
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v[v.len() / 2]
+        }
+    };
+    let before = median(rows.iter().map(|r| r.conformal.length_over_ideal).collect());
+    let after = median(rows.iter().map(|r| r.optimised.length_over_ideal).collect());
+    let worst = rows.iter().map(|r| r.optimised.length_over_ideal).fold(f64::NAN, f64::max);
+    let med_scallop = median(rows.iter().map(|r| r.optimised.median_over_h).collect());
+    let kept = rows.iter().filter(|r| r.path_field != "tpsfo").count();
+    let over = rows.iter().filter(|r| r.optimised.max_over_h > 1.0 && r.conformal.max_over_h <= 1.0).count();
+    format!(
+        "{} parts planned, {failed} not: median length/ideal {before:.3} -> {after:.3} ({:+.1} %), largest {worst:.3}; median scallop {med_scallop:.3} h; conformal path kept on {kept}; over h where the conformal path is not: {over}",
+        rows.len(),
+        100.0 * (after / before - 1.0)
+    )
 }

@@ -12,6 +12,7 @@
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
 //! | optimal pole: scallop-uniformity energy E_min and its minimisation | [`origin`] | implemented |
+//! | scalar-field optimisation (seed 003): rings that follow the surface | [`optimise`] | implemented |
 //! | ring radii with the scallop height under control | [`spacing`] | implemented |
 //! | rings bridged into one spiral around the holes | [`spiral`] | implemented |
 //! | ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
@@ -31,6 +32,7 @@ mod hash;
 pub mod linalg;
 pub mod mesh;
 pub mod num;
+pub mod optimise;
 pub mod origin;
 mod par;
 pub mod plan;

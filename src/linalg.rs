@@ -538,6 +538,45 @@ impl SparseCholesky {
         Ok(())
     }
 
+    /// Where entry (`row`, `col`) of A (either triangle) is among the stored lower entries in CSC
+    /// order, or `None` outside the pattern: a caller refactorising one pattern many times
+    /// accumulates its values there ([`SparseCholesky::refactor_lower`]) instead of sorting
+    /// triplets each time.
+    pub fn lower_slot(&self, row: usize, col: usize) -> Option<usize> {
+        let (row, col) = (row.max(col), row.min(col));
+        let sym = &self.symbolic;
+        if col >= sym.n {
+            return None;
+        }
+        let (a, b) = (sym.col_ptr[col] as usize, sym.col_ptr[col + 1] as usize);
+        sym.row_idx[a..b].binary_search(&(row as u32)).ok().map(|k| a + k)
+    }
+
+    /// Number of stored lower entries of A (the length [`SparseCholesky::refactor_lower`] takes).
+    pub fn lower_len(&self) -> usize {
+        self.symbolic.row_idx.len()
+    }
+
+    /// New numeric values with the same pattern, given as the stored lower entries of A in CSC
+    /// order ([`SparseCholesky::lower_slot`]). On error the previous factorisation is kept.
+    pub fn refactor_lower(&mut self, values: &[f64]) -> Result<(), LinalgError> {
+        if values.len() != self.symbolic.row_idx.len() {
+            return Err(LinalgError::PatternMismatch {
+                detail: format!(
+                    "{} stored lower-triangle entries, {} given",
+                    self.symbolic.row_idx.len(),
+                    values.len()
+                ),
+            });
+        }
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            let col = self.symbolic.col_ptr.partition_point(|&p| p as usize <= k) - 1;
+            return Err(LinalgError::NonFinite { row: self.symbolic.row_idx[k] as usize, col });
+        }
+        self.values = self.symbolic.factorise(values)?;
+        Ok(())
+    }
+
     /// The elimination order used (`order[k]` = unknown eliminated at step k).
     pub fn order(&self) -> &[u32] {
         &self.symbolic.perm

@@ -252,3 +252,59 @@ fn issue_4_a_pole_the_map_cannot_carry_names_where_the_path_would_jump() {
         err.split("angle ").nth(1).and_then(|s| s.split(' ').next()).and_then(|s| s.parse().ok()).expect(&err);
     assert!(angle.abs() <= std::f64::consts::PI, "{err}");
 }
+
+#[test]
+fn plan_optimises_the_field_by_default_and_reports_it() {
+    // Issue 32: `--optimise tpsfo` (the default) and `none`, named in the G-code header and in
+    // the report (its `optimise` section, the path's length over the flat-plate bound, the
+    // verifier's median scallop).
+    let part = temp("freeform.stl");
+    assert!(slitpath(&["fixture", "freeform_4_holes", "-o", part.to_str().unwrap()]).status.success());
+    let run = |extra: &[&str]| -> (String, serde_json::Value) {
+        let tag = extra.join("-");
+        let (out, json) = (temp(&format!("ff{tag}.ngc")), temp(&format!("ff{tag}.json")));
+        let mut args = vec!["plan", part.to_str().unwrap(), "--verify-samples", "20000"];
+        args.extend_from_slice(extra);
+        args.extend(["-o", out.to_str().unwrap(), "--report", json.to_str().unwrap()]);
+        let o = slitpath(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (std::fs::read_to_string(out).unwrap(), serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap())
+    };
+    let (gcode, optimised) = run(&[]);
+    assert!(gcode.contains("(- field: seed 003 optimised, tpsfo, alpha 10)"), "{}", &gcode[..600]);
+    let o = &optimised["optimise"];
+    assert_eq!(o["path_field"], "tpsfo");
+    assert!(o["iterations"].as_u64().unwrap() >= 1);
+    assert!(o["after"]["total"].as_f64().unwrap() < o["before"]["total"].as_f64().unwrap());
+    assert!(o["uniformity_after"].as_f64().unwrap() < o["uniformity_before"].as_f64().unwrap());
+    let (gcode, conformal) = run(&["--optimise", "none"]);
+    assert!(gcode.contains("(- field: conformal slit map, seed 000)"));
+    assert!(conformal.get("optimise").is_none());
+    let ratio = |r: &serde_json::Value| r["path"]["length_over_ideal"].as_f64().unwrap();
+    assert!(ratio(&optimised) < ratio(&conformal), "{} vs {}", ratio(&optimised), ratio(&conformal));
+    let median = |r: &serde_json::Value| r["verify"]["median_scallop_mm"].as_f64().unwrap();
+    assert!(median(&optimised) > 0.0 && median(&optimised) < 0.02);
+    // A larger α is accepted and reported; a bad choice is one line on stderr.
+    let (_, smoother) = run(&["--alpha", "100"]);
+    assert_eq!(smoother["optimise"]["alpha"].as_f64(), Some(100.0));
+    let bad = slitpath(&["plan", part.to_str().unwrap(), "--optimise", "best", "-o", temp("y.ngc").to_str().unwrap()]);
+    let err = String::from_utf8(bad.stderr).unwrap();
+    assert!(!bad.status.success() && err.trim().lines().count() == 1 && err.contains("--optimise `best`"), "{err}");
+    let bad = slitpath(&["plan", part.to_str().unwrap(), "--alpha", "-1", "-o", temp("z.ngc").to_str().unwrap()]);
+    let err = String::from_utf8(bad.stderr).unwrap();
+    assert!(
+        !bad.status.success() && err.trim().lines().count() == 1 && err.contains("α must be a number ≥ 0, got -1"),
+        "{err}"
+    );
+}
+
+#[test]
+fn fixture_writes_generated_parts() {
+    let path = temp("gen7.stl");
+    assert!(slitpath(&["fixture", "gen:7:3000", "-o", path.to_str().unwrap()]).status.success());
+    let soup = mesh::stl::read(&std::fs::read(&path).unwrap(), usize::MAX).unwrap();
+    assert_eq!(soup.triangles.len(), fixtures::generated::part(7, 3000..=3000).mesh.triangles.len());
+    for bad in ["gen:x", "gen:1:5", "gen:1:2:3"] {
+        assert!(!slitpath(&["fixture", bad, "-o", "/tmp/x.stl"]).status.success(), "{bad}");
+    }
+}

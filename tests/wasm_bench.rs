@@ -63,3 +63,26 @@ async fn whole_pipeline_in_the_browser() {
     let bytes = js_sys::ArrayBuffer::from(memory.buffer()).byte_length();
     console_log!("wasm linear memory after all cases (its peak): {:.0} MiB", bytes as f64 / (1024.0 * 1024.0));
 }
+
+#[wasm_bindgen_test]
+async fn path_length_in_the_browser() {
+    // The first parts of `cargo bench --bench length`'s list (the whole list takes minutes).
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    console_log!("path length at equal finish, wasm (headless Chromium)\n{}", slitpath::bench::LENGTH_HEADER);
+    let (mut rows, mut failed) = (Vec::new(), 0);
+    for part in slitpath::bench::length_parts(6) {
+        yield_to_browser().await;
+        match slitpath::bench::run_length(&part, &now) {
+            Ok(row) => {
+                console_log!("{}", slitpath::bench::format_length(&row));
+                rows.push(row);
+            }
+            Err(e) => {
+                console_log!("{:<42} cannot be planned: {e}", part.name);
+                failed += 1;
+            }
+        }
+    }
+    console_log!("{}", slitpath::bench::summarise_lengths(&rows, failed));
+}

@@ -387,6 +387,26 @@ impl SlitMap {
             .collect()
     }
 
+    /// The same map with every vertex moved along its ray to radius `radii[v]`, angles kept:
+    /// seed 003's S^H ([`crate::optimise`]). Each hole's slit, log radius and (annulus) inner
+    /// radius follow its loop in `loops` (the surface's boundary loops, whose vertices the caller
+    /// moves together): they take the radius of the loop's first vertex.
+    ///
+    /// # Panics
+    /// If `radii` has not one entry per vertex (a programming error).
+    pub fn with_radii(&self, radii: &[f64], loops: &[Vec<u32>]) -> SlitMap {
+        assert_eq!(radii.len(), self.w.len(), "one radius per vertex");
+        let w = self.w.iter().zip(radii).map(|(&w, &r)| w * (r / w.length())).collect();
+        let loop_radius = |hole: usize| radii[loops[hole][0] as usize];
+        let mode = match self.mode {
+            Mode::Disk => Mode::Disk,
+            Mode::Annulus { hole, .. } => Mode::Annulus { hole, inner_radius: loop_radius(hole) },
+        };
+        let slits = self.slits.iter().map(|s| Slit { radius: loop_radius(s.hole), ..*s }).collect();
+        let hole_log_radius = (1..loops.len()).map(|hole| num::ln(loop_radius(hole))).collect();
+        SlitMap { w, mode, slits, hole_log_radius, triangles: self.triangles.clone(), ..*self }
+    }
+
     /// Spatial index over the image triangles for the inverse map (slit domain → mesh).
     pub fn inverse_map(&self) -> InverseMap {
         InverseMap::new(&self.w, self.triangles.clone())

@@ -19,7 +19,7 @@
 //!   distinct times the path passes over q = maximal runs of consecutive capsules containing q,
 //!   counted over all passes.
 //!
-//! Figures ([`Verification`]): max / mean / p95 / p99 scallop over the covered samples
+//! Figures ([`Verification`]): max / mean / median / p95 / p99 scallop over the covered samples
 //! (nearest-rank percentiles), seed 000's uniformity index V_max (eq. 23: the variance of the
 //! per-cell maximum scallop over a 3D grid of cells), gouges, uncovered samples, CT² = Σ CT² ·
 //! (area per sample) and max CT, retractions (passes − 1), and the scallop at every surface
@@ -112,6 +112,8 @@ pub struct Verification {
     /// Statistics of the scallop over the covered samples (0 when none is covered).
     pub max_scallop_mm: f64,
     pub mean_scallop_mm: f64,
+    /// The median: evenly spaced passes leave about h/4 there; far less is over-cut.
+    pub median_scallop_mm: f64,
     pub p95_scallop_mm: f64,
     pub p99_scallop_mm: f64,
     /// Seed 000 eq. 23: variance of the per-cell maximum scallop, cells of `cell_mm` (mm²).
@@ -348,6 +350,7 @@ fn verify_on(
         samples: n,
         max_scallop_mm: f.scallops.last().copied().unwrap_or(0.0),
         mean_scallop_mm: f.mean,
+        median_scallop_mm: percentile(&f.scallops, 0.5),
         p95_scallop_mm: percentile(&f.scallops, 0.95),
         p99_scallop_mm: percentile(&f.scallops, 0.99),
         v_max_mm2: f.v_max,

@@ -17,7 +17,7 @@ use wasm_bindgen::JsCast;
 use crate::gcode::Post;
 use crate::mesh::{self, MeshOptions, MeshOutput};
 use crate::origin::{EnergyEvaluator, OriginChoice, OriginOptions};
-use crate::plan::{Facets, Plan, PlanOptions, Planner as Core};
+use crate::plan::{Facets, Optimise, Plan, PlanOptions, Planner as Core};
 use crate::slitmap::SlitMap;
 use crate::spiral::{Cut, Direction};
 use crate::toolpath::Axes;
@@ -115,6 +115,8 @@ struct JsPlanOptions {
     verify_samples: Option<usize>,
     part_name: Option<String>,
     facets: Option<Facets>,
+    optimise: Option<Optimise>,
+    alpha: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -126,7 +128,7 @@ enum JsOrigin {
 }
 
 impl JsPlanOptions {
-    const FIELDS: [&'static str; 16] = [
+    const FIELDS: [&'static str; 18] = [
         "radiusMm",
         "scallopMm",
         "axes",
@@ -143,6 +145,8 @@ impl JsPlanOptions {
         "verifySamples",
         "partName",
         "facets",
+        "optimise",
+        "alpha",
     ];
 
     fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
@@ -194,6 +198,8 @@ impl JsPlanOptions {
             verify_samples: js.verify_samples.unwrap_or(d.verify_samples),
             part_name: js.part_name.unwrap_or(d.part_name),
             facets: js.facets.unwrap_or(d.facets),
+            optimise: js.optimise.unwrap_or(d.optimise),
+            alpha: js.alpha.unwrap_or(d.alpha),
         })
     }
 }
@@ -294,7 +300,7 @@ impl Planner {
 
     /// Plans with `options` (see `JsPlanOptions`: radiusMm, scallopMm, axes, leadDeg, tiltDeg,
     /// direction, cut, origin, post, feedMmMin, plungeFeedMmMin, spindleRpm, safeZMm,
-    /// verifySamples, partName, facets) and returns the plan report (the CLI's `--report` object).
+    /// verifySamples, partName, facets, optimise, alpha) and returns the plan report (the CLI's `--report` object).
     /// `on_progress(stage, done, total)` is called as each stage starts.
     pub fn plan(&mut self, options: JsValue, on_progress: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let options = JsPlanOptions::parse(options)?;

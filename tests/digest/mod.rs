@@ -5,6 +5,8 @@
 
 use slitpath::flatten::{self, FlattenInput, FlattenOptions};
 use slitpath::mesh::{self, stl, MeshOptions};
+use slitpath::optimise::{self, OptimiseOptions};
+use slitpath::origin::{EnergyEvaluator, OriginOptions};
 use slitpath::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
 
 /// The fixtures digested: two parts with holes, about 4k and 10k faces.
@@ -22,9 +24,9 @@ pub fn fnv1a(values: impl IntoIterator<Item = f64>) -> u64 {
     h
 }
 
-/// One line of `expected.txt`: `name positions=… uv=… w_disk=… w_annulus=…` (hex digests of the
-/// welded input positions, the flattening, the disk map for the centre of the largest face and
-/// the annulus map of hole 1).
+/// One line of `expected.txt`: `name positions=… uv=… w_disk=… w_annulus=… w_tpsfo=…` (hex
+/// digests of the welded input positions, the flattening, the disk map for the centre of the
+/// largest face, the annulus map of hole 1, and the disk map's field optimised by seed 003).
 pub fn digest_line(name: &str) -> String {
     let part = slitpath::fixtures::by_name(name).expect("a fixture name");
     // Through STL bytes, as the page and the CLI read a part (f32 coordinates).
@@ -35,14 +37,18 @@ pub fn digest_line(name: &str) -> String {
     let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).expect("factorises");
     let disk = solver.map(domain.largest_face_centre()).expect("disk map");
     let annulus = solver.map(solver.canonical_hole_pole(1)).expect("annulus map");
+    let evaluator = EnergyEvaluator::new(&surface, &solver, &OriginOptions::default()).expect("energy");
+    let slopes = evaluator.evaluate_map(&disk).expect("energy of the disk map").slopes;
+    let tpsfo = optimise::optimise(&surface, &disk, &slopes, &OptimiseOptions::default()).expect("optimises").map;
     let xy = |v: &[glam::DVec2]| -> Vec<f64> { v.iter().flat_map(|p| [p.x, p.y]).collect() };
     let positions: Vec<f64> = surface.positions.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
     format!(
-        "{name} positions={:016x} uv={:016x} w_disk={:016x} w_annulus={:016x}",
+        "{name} positions={:016x} uv={:016x} w_disk={:016x} w_annulus={:016x} w_tpsfo={:016x}",
         fnv1a(positions),
         fnv1a(xy(&domain.positions)),
         fnv1a(xy(&disk.w)),
-        fnv1a(xy(&annulus.w))
+        fnv1a(xy(&annulus.w)),
+        fnv1a(xy(&tpsfo.w))
     )
 }
 

@@ -86,6 +86,30 @@ export interface PlanOptions {
    * no deeper than they deviate from them.
    */
   facets?: "exact" | "smooth";
+  /**
+   * "tpsfo" (default): seed 003's scalar-field optimisation, rings that follow the surface
+   * (shorter paths); "none": the conformal slit map's circles (seed 000).
+   */
+  optimise?: "tpsfo" | "none";
+  /** Seed 003's α on the paper's scale: larger gives smoother, longer paths. Default 10. */
+  alpha?: number;
+}
+
+/** What seed 003's optimisation did (the report's `optimise` section). */
+export interface OptimiseReport {
+  /** "tpsfo" when the path follows the optimised field, "conformal" when the planner kept the slit map's own. */
+  path_field: "tpsfo" | "conformal";
+  /** Why the conformal map's path was written instead. */
+  fallback?: string;
+  /** The optimised path's length when it was not kept, mm. */
+  optimised_length_mm?: number;
+  iterations?: number;
+  stop?: string;
+  /** E_w over twice the area at the start and the end (1 = the predicted scallop uniform along every level). */
+  uniformity_before?: number;
+  uniformity_after?: number;
+  before?: { e_w: number; e_n: number; e_g: number; total: number };
+  after?: { e_w: number; e_n: number; e_g: number; total: number };
 }
 
 /** The plan report: the CLI's `--report` JSON. */
@@ -104,8 +128,12 @@ export interface PlanReport {
     rejected?: { pole_uv: Vec2; e_min: number; reason: string }[];
   };
   rings: unknown;
+  /** Absent with `optimise: "none"`. */
+  optimise?: OptimiseReport;
   path: {
     length_mm: number;
+    /** The length over the flat-plate bound area / (2·√(2Rh)). */
+    length_over_ideal: number;
     points: number;
     retractions: number;
     max_turn_deg: number;
@@ -117,6 +145,7 @@ export interface PlanReport {
   verify: {
     max_scallop_mm: number;
     mean_scallop_mm: number;
+    median_scallop_mm: number;
     p95_scallop_mm: number;
     p99_scallop_mm: number;
     v_max_mm2: number;

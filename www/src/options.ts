@@ -25,6 +25,8 @@ const PARAM: Record<Key, string> = {
   safeZMm: "safez",
   verifySamples: "samples",
   facets: "facets",
+  optimise: "optimise",
+  alpha: "alpha",
 };
 
 const CHOICES = {
@@ -33,6 +35,7 @@ const CHOICES = {
   cut: ["climb", "conventional"],
   post: ["linuxcnc", "grbl", "ac", "cl"],
   facets: ["exact", "smooth"],
+  optimise: ["tpsfo", "none"],
 } as const;
 
 /** "auto" | "centroid" | "hole:N" | "x,y" (flattened plane) | "x,y,z" (3D point). */
@@ -63,7 +66,8 @@ function parse<K extends Key>(key: K, text: string): FullPlanOptions[K] | null {
     case "cut":
     case "post":
     case "facets":
-      value = (CHOICES[key as "direction" | "cut" | "post" | "facets"] as readonly string[]).includes(text) ? text : null;
+    case "optimise":
+      value = (CHOICES[key as "direction" | "cut" | "post" | "facets" | "optimise"] as readonly string[]).includes(text) ? text : null;
       break;
     case "axes":
       value = text === "3" ? 3 : text === "5" ? 5 : null;
@@ -141,6 +145,6 @@ export function cliArguments(options: FullPlanOptions): string[] {
   args.push("--origin", originToText(options.origin), "--direction", options.direction);
   args.push("--feed", String(options.feedMmMin), "--spindle", String(options.spindleRpm));
   if (options.safeZMm !== null) args.push("--safe-z", String(options.safeZMm));
-  args.push("--facets", options.facets);
+  args.push("--facets", options.facets, "--optimise", options.optimise, "--alpha", String(options.alpha));
   return args;
 }

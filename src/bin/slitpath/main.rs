@@ -115,6 +115,13 @@ mod cli {
             /// tessellates a smooth surface: the ball follows the vertex normals).
             #[arg(long, default_value = "exact")]
             facets: String,
+            /// tpsfo (seed 003: the rings follow the surface, shorter paths) or none (the
+            /// conformal slit map's circles, seed 000).
+            #[arg(long, default_value = "tpsfo")]
+            optimise: String,
+            /// Seed 003's α, mm²: larger gives smoother, longer paths.
+            #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
+            alpha: f64,
             /// Where to write the G-code or CL data.
             #[arg(short, long)]
             output: PathBuf,
@@ -215,6 +222,8 @@ mod cli {
                 safe_z,
                 verify_samples,
                 facets,
+                optimise,
+                alpha,
                 output,
                 report,
                 mesh: args,
@@ -236,6 +245,8 @@ mod cli {
                     safe_z,
                     verify_samples,
                     facets: &facets,
+                    optimise: &optimise,
+                    alpha,
                 })?;
                 let (gcode, json) = crate::plan::run(&part, &args.options(), &options)?;
                 write(&output, gcode.as_bytes())?;

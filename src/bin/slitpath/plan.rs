@@ -4,7 +4,7 @@ use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::origin::OriginChoice;
-use slitpath::plan::{Facets, PlanOptions, Planner};
+use slitpath::plan::{Facets, Optimise, PlanOptions, Planner};
 use slitpath::spiral::{Cut, Direction};
 use slitpath::toolpath::Axes;
 use std::path::Path;
@@ -28,6 +28,8 @@ pub struct Args<'a> {
     pub safe_z: Option<f64>,
     pub verify_samples: usize,
     pub facets: &'a str,
+    pub optimise: &'a str,
+    pub alpha: f64,
 }
 
 pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
@@ -52,6 +54,11 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         "smooth" => Facets::Smooth,
         f => return Err(format!("--facets `{f}`: use exact or smooth")),
     };
+    let optimise = match a.optimise {
+        "tpsfo" => Optimise::Tpsfo,
+        "none" => Optimise::None,
+        o => return Err(format!("--optimise `{o}`: use tpsfo or none")),
+    };
     let part_name = a.part.file_stem().map_or("part".into(), |s| s.to_string_lossy().into_owned());
     Ok(PlanOptions {
         radius_mm: a.radius,
@@ -68,6 +75,8 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         verify_samples: a.verify_samples,
         part_name,
         facets,
+        optimise,
+        alpha: a.alpha,
     })
 }
 

@@ -20,4 +20,6 @@ export const DEFAULT_PLAN_OPTIONS: Readonly<FullPlanOptions> = Object.freeze({
   safeZMm: null,
   verifySamples: 100000,
   facets: "exact",
+  optimise: "tpsfo",
+  alpha: 10,
 });

@@ -17,14 +17,32 @@ function rows(plan: PlanResult, limit: number): Row[] {
   const gain = origin.e_min_centroid > 0 ? 1 - origin.e_min / origin.e_min_centroid : 0;
   const minutes = path.time_min;
   const rejected = origin.rejected?.length ?? 0;
+  const optimise = report.optimise;
   return [
     ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
     ["metric-length", "Path length", `${n1.format(path.length_mm)} mm (${n0.format(path.points)} points)`],
+    // The flat-plate bound area / (2·√(2Rh)): evenly spaced passes on a gently curved part come
+    // to about 1.05.
+    ["metric-length-ideal", "Length / ideal", n3.format(path.length_over_ideal)],
+    [
+      "metric-field",
+      "Ring field",
+      optimise === undefined
+        ? "conformal circles (seed 000)"
+        : optimise.path_field === "tpsfo"
+          ? `optimised (seed 003): ${n0.format(optimise.iterations ?? 0)} steps, uniformity ${n3.format(optimise.uniformity_before ?? 0)} → ${n3.format(optimise.uniformity_after ?? 0)}`
+          : `conformal circles: ${optimise.fallback ?? "the optimised field was not used"}`,
+      optimise !== undefined && optimise.path_field !== "tpsfo",
+    ],
     ["metric-time", "Cutting time", minutes < 1 ? `${n0.format(minutes * 60)} s` : `${n1.format(minutes)} min`],
     ["metric-retractions", "Retractions", n0.format(path.retractions), path.retractions > 0],
     ["metric-max-turn", "Sharpest turn", `${n1.format(path.max_turn_deg)}°`],
     ["metric-max-scallop", "Max scallop", `${mm(verify.max_scallop_mm)} (h = ${mm(limit)})`, verify.max_scallop_mm > limit * 1.0001],
-    ["metric-mean-scallop", "Mean / p95 / p99", `${mm(verify.mean_scallop_mm)} / ${mm(verify.p95_scallop_mm)} / ${mm(verify.p99_scallop_mm)}`],
+    [
+      "metric-mean-scallop",
+      "Median / mean / p95 / p99",
+      `${mm(verify.median_scallop_mm)} / ${mm(verify.mean_scallop_mm)} / ${mm(verify.p95_scallop_mm)} / ${mm(verify.p99_scallop_mm)}`,
+    ],
     ["metric-vmax", "V_max (uniformity)", `${n3.format(verify.v_max_mm2)} mm²`],
     ["metric-uncovered", "Uncovered", `${n3.format(100 * verify.uncovered_fraction)} % of samples`, verify.uncovered_fraction > 0],
     ["metric-gouges", "Gouges", n0.format(verify.gouges), verify.gouges > 0],

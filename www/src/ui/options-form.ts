@@ -6,8 +6,8 @@ import type { FullPlanOptions } from "../lib/defaults";
 import { originFromText, originToText } from "../options";
 import { el } from "./dom";
 
-type NumberKey = "radiusMm" | "scallopMm" | "leadDeg" | "tiltDeg" | "feedMmMin" | "plungeFeedMmMin" | "spindleRpm" | "safeZMm" | "verifySamples";
-type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets";
+type NumberKey = "radiusMm" | "scallopMm" | "leadDeg" | "tiltDeg" | "feedMmMin" | "plungeFeedMmMin" | "spindleRpm" | "safeZMm" | "verifySamples" | "alpha";
+type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets" | "optimise";
 
 interface NumberField { key: NumberKey; id: string; label: string; unit: string; step: string; optional?: boolean; fiveAxis?: boolean }
 interface ChoiceField { key: ChoiceKey; id: string; label: string; choices: [string, string][] }
@@ -21,6 +21,8 @@ const TOOL: (NumberField | ChoiceField)[] = [
   { key: "direction", id: "direction", label: "Direction", choices: [["inward", "inward (boundary → centre)"], ["outward", "outward"]] },
   { key: "cut", id: "cut", label: "Cut", choices: [["climb", "climb"], ["conventional", "conventional"]] },
   { key: "facets", id: "facets", label: "Facets", choices: [["exact", "exact (the STL is the part)"], ["smooth", "smooth (a tessellated smooth surface)"]] },
+  { key: "optimise", id: "optimise", label: "Rings", choices: [["tpsfo", "optimised field (seed 003, shorter)"], ["none", "conformal circles (seed 000)"]] },
+  { key: "alpha", id: "alpha", label: "Smoothness α", unit: "", step: "1" },
 ];
 const MACHINE: (NumberField | ChoiceField)[] = [
   { key: "post", id: "post", label: "Post", choices: [["linuxcnc", "LinuxCNC (3-axis)"], ["grbl", "GRBL (3-axis)"], ["ac", "5-axis AC table-table (TCP)"], ["cl", "CL data (APT)"]] },
