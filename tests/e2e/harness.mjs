@@ -89,7 +89,7 @@ export function canvasStats(page, testId) {
 
 /** Runs the slitpath CLI (the release binary `npm test` built, else through cargo). */
 export function cli(...args) {
-  const binary = join(root, "target/release/slitpath");
+  const binary = join(process.env.CARGO_TARGET_DIR ? resolve(root, process.env.CARGO_TARGET_DIR) : join(root, "target"), "release/slitpath");
   const [command, rest] = existsSync(binary)
     ? [binary, args]
     : ["cargo", ["run", "--release", "--quiet", "--bin", "slitpath", "--", ...args]];
@@ -99,4 +99,56 @@ export function cli(...args) {
 export function screenshotPath(name) {
   mkdirSync(output, { recursive: true });
   return join(output, name);
+}
+
+/**
+ * Records, in the page, the main thread's long tasks (PerformanceObserver 'longtask'), when a file
+ * was chosen in the STL input and when the status first read "planned" after that. Call before
+ * page.goto; read with pageTimeline(page).
+ */
+export async function recordTimeline(page) {
+  await page.addInitScript(() => {
+    const t = (window.__timeline = { longTasks: [], chosen: null, planned: null });
+    new PerformanceObserver((list) => {
+      for (const e of list.getEntries()) t.longTasks.push({ start: e.startTime, duration: e.duration });
+    }).observe({ type: "longtask", buffered: true });
+    document.addEventListener(
+      "change",
+      (event) => {
+        if (event.target?.id !== "stl-input") return;
+        t.chosen = performance.now();
+        t.planned = null;
+      },
+      true,
+    );
+    new MutationObserver(() => {
+      const status = document.getElementById("status")?.textContent ?? "";
+      if (t.chosen !== null && t.planned === null && status === "planned") t.planned = performance.now();
+    }).observe(document, { subtree: true, childList: true, characterData: true });
+  });
+}
+
+/** Since the file was chosen: wall time to "planned", and the long tasks (ms). */
+export function pageTimeline(page) {
+  return page.evaluate(() => {
+    const t = window.__timeline;
+    const tasks = t.longTasks.filter((e) => t.chosen !== null && e.start + e.duration > t.chosen);
+    return {
+      chosenToPlannedMs: t.planned !== null ? t.planned - t.chosen : null,
+      longTaskSumMs: tasks.reduce((s, e) => s + e.duration, 0),
+      longTaskMaxMs: tasks.reduce((m, e) => Math.max(m, e.duration), 0),
+      longTasks: tasks.length,
+    };
+  });
+}
+
+/** The planner's own time (the report's total, ms) and its memory (MiB), as the metrics panel shows them. */
+export async function plannerFigures(page) {
+  const timings = (await page.getByTestId("metric-timings").textContent()) ?? "";
+  const memory = (await page.getByTestId("metric-memory").textContent().catch(() => "")) ?? "";
+  const number = (text, pattern) => {
+    const m = text.match(pattern);
+    return m ? Number(m[1].replace(/,/g, "")) : null;
+  };
+  return { plannerMs: number(timings, /total ([\d,]+)/), wasmMiB: number(memory, /([\d,]+) MiB/) };
 }

@@ -176,11 +176,19 @@ interface PlanningMethods {
 }
 
 let ready: Promise<void> | undefined;
+let memory: WebAssembly.Memory | undefined;
 
 /** Instantiates the wasm module once; later calls share the same promise. */
 export function initCore(): Promise<void> {
-  ready ??= init().then(() => undefined);
+  ready ??= init().then((core) => {
+    memory = core.memory;
+  });
   return ready;
+}
+
+/** Size of the core's linear memory, bytes: it never shrinks, so this is its peak so far. */
+export function coreMemoryBytes(): number {
+  return memory?.buffer.byteLength ?? 0;
 }
 
 /** The core's version, e.g. "0.1.0" (after initCore()). */

@@ -20,6 +20,8 @@ export interface LoadedPart {
   conformalError: string | null;
   /** Time to read, check and flatten, ms. */
   ms: number;
+  /** The core's linear memory after loading (its peak so far), bytes. */
+  wasmMemoryBytes: number;
 }
 
 /** A plan's outputs plus what the views derive from them (computed in the worker). */
@@ -30,6 +32,8 @@ export interface PlanResult extends PlanOutput {
   moveOfPoint: Uint32Array;
   /** Wall time of the plan in the worker, ms. */
   ms: number;
+  /** The core's linear memory after planning (its peak so far), bytes. */
+  wasmMemoryBytes: number;
 }
 
 export type WorkerRequest =

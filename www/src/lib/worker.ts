@@ -5,7 +5,7 @@
 // `self` is typed with the DOM lib (the page's tsconfig); postMessage(message, { transfer }) and
 // the "message" event have the same shape on a DedicatedWorkerGlobalScope.
 
-import { Part, coreVersion, errorMessage, initCore, isFatal } from "../core";
+import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal } from "../core";
 import { PlanarLocator, boundaryLoops, mapPoints, matchMoves } from "./geometry";
 import type { LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
 
@@ -59,6 +59,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     previewW,
     conformalError,
     ms: performance.now() - started,
+    wasmMemoryBytes: coreMemoryBytes(),
   };
   const extra = [loaded.uv, previewW].filter((a): a is Float64Array => a !== null);
   post({ type: "loaded", id: request.id, part: loaded }, buffers(positions, triangles, ...loaded.loops, ...extra));
@@ -80,6 +81,7 @@ function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {
     pathUv,
     moveOfPoint: matchMoves(output.pathContacts, output.pathTips),
     ms: performance.now() - started,
+    wasmMemoryBytes: coreMemoryBytes(),
   };
   const { w, ringRadii, pathContacts, pathW, pathTips, pathAxes, vertexScallop, moveOfPoint } = result;
   post(
