@@ -67,15 +67,15 @@ export async function launch() {
   };
 }
 
-/** Share of pixels unlike the canvas's corner colour, and the number of distinct colours. */
-export function canvasStats(page, testId) {
-  return page.evaluate((id) => {
-    const source = document.querySelector(`[data-testid=${id}]`);
-    const copy = document.createElement("canvas");
-    [copy.width, copy.height] = [source.width, source.height];
-    const g = copy.getContext("2d");
-    g.drawImage(source, 0, 0);
-    const { data } = g.getImageData(0, 0, copy.width, copy.height);
+/**
+ * Of a view's last frame, read back from its canvas in the render worker (through the page's test
+ * hook `slitpathViews`; testId view-3d or view-2d): the share of pixels unlike the corner's
+ * colour, and the number of distinct colours.
+ */
+export function viewStats(page, testId) {
+  return page.evaluate(async (id) => {
+    const canvas = document.querySelector(`[data-testid=${id}]`);
+    const { width, height, data } = await window.slitpathViews.pixels(id.replace("view-", ""), 0, 0, canvas.clientWidth, canvas.clientHeight);
     const [r0, g0, b0] = data;
     let differ = 0;
     const colours = new Set();
@@ -83,7 +83,7 @@ export function canvasStats(page, testId) {
       if (Math.abs(data[i] - r0) + Math.abs(data[i + 1] - g0) + Math.abs(data[i + 2] - b0) > 24) differ++;
       colours.add((data[i] >> 3) * 1024 + (data[i + 1] >> 3) * 32 + (data[i + 2] >> 3));
     }
-    return { width: copy.width, height: copy.height, nonBackground: differ / (data.length / 4), colours: colours.size };
+    return { width, height, nonBackground: differ / (data.length / 4), colours: colours.size };
   }, testId);
 }
 

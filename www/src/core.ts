@@ -151,6 +151,10 @@ export interface PlanOutput {
   pathContacts: Float64Array;
   /** w (re, im) per path point. */
   pathW: Float64Array;
+  /** Surface face (index into the triangles) of each path point. */
+  pathFaces: Uint32Array;
+  /** Unit surface normal (towards the tool) per path point, xyz. */
+  pathNormals: Float64Array;
   /** xyz tool tip per toolpath move (incl. lead-in/out). */
   pathTips: Float64Array;
   /** Unit tool axis per toolpath move. */
@@ -165,6 +169,8 @@ export type ProgressCallback = (stage: string, done: number, total: number) => v
 interface PlanningMethods {
   plan(options: object, onProgress?: ProgressCallback): unknown;
   planW(): Float64Array;
+  pathFaces(): Uint32Array;
+  pathNormals(): Float64Array;
   ringRadii(): Float64Array;
   pathContacts(): Float64Array;
   pathW(): Float64Array;
@@ -201,9 +207,17 @@ export class Part {
   private constructor(private readonly planner: Planner) {}
 
   /** Reads and validates an STL; throws an Error whose message names the fault. */
-  static async open(stl: Uint8Array, options?: MeshOptions): Promise<Part> {
+  static async open(stl: Uint8Array, options?: MeshOptions, onProgress?: ProgressCallback): Promise<Part> {
     await initCore();
-    return new Part(new Planner(stl, options));
+    return new Part(new Planner(stl, options, onProgress));
+  }
+
+  /**
+   * Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index),
+   * reporting each step; throws for a surface that cannot be planned (closed, genus > 0).
+   */
+  prepare(onProgress?: ProgressCallback): void {
+    this.planner.prepare(onProgress);
   }
 
   report(): MeshReport {
@@ -245,6 +259,8 @@ export class Part {
       ringRadii: p.ringRadii(),
       pathContacts: p.pathContacts(),
       pathW: p.pathW(),
+      pathFaces: p.pathFaces(),
+      pathNormals: p.pathNormals(),
       pathTips: p.pathTips(),
       pathAxes: p.pathAxes(),
       vertexScallop: p.vertexScallop(),

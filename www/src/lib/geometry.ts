@@ -1,5 +1,6 @@
-// Mesh helpers shared by the worker and the views: boundary loops, point location in a planar
-// image of the mesh (slit domain → flattened domain), and the path-point → toolpath-move match.
+// Mesh helpers of the worker: boundary loops, point location in a planar image of the mesh (slit
+// domain → flattened domain), path points carried to the flattened plane through their faces,
+// and the path-point → toolpath-move match.
 
 /** Boundary loops as vertex index lists (edges used by one triangle, chained), longest first. */
 export function boundaryLoops(triangles: Uint32Array): Uint32Array[] {
@@ -126,35 +127,87 @@ export class PlanarLocator {
   }
 }
 
-/** Maps every point of `points` (xy pairs, in the image `xy`) to `field` (NaN where not located). */
-export function mapPoints(locator: PlanarLocator, points: Float64Array, field: Float64Array): Float64Array {
-  const out = new Float64Array(points.length);
-  for (let i = 0; i < points.length; i += 2) {
-    const p = locator.map(points[i]!, points[i + 1]!, field);
-    out[i] = p?.[0] ?? NaN;
-    out[i + 1] = p?.[1] ?? NaN;
+/**
+ * The per-vertex 2-vector `field` (e.g. uv) at each path point: `contacts` (xyz) lie on their
+ * faces `faces` of the surface (`positions`, `triangles`), so barycentric coordinates in the face
+ * carry them over. O(1) per point, no point location.
+ */
+export function pathField(
+  contacts: Float64Array,
+  faces: Uint32Array,
+  positions: Float32Array,
+  triangles: Uint32Array,
+  field: Float64Array,
+): Float64Array {
+  const out = new Float64Array((contacts.length / 3) * 2);
+  for (let i = 0; i < faces.length; i++) {
+    const f = 3 * faces[i]!;
+    const [a, b, c] = [triangles[f]!, triangles[f + 1]!, triangles[f + 2]!];
+    const [ax, ay, az] = [positions[3 * a]!, positions[3 * a + 1]!, positions[3 * a + 2]!];
+    // Barycentric coordinates of the contact projected onto the face's plane.
+    const [e1x, e1y, e1z] = [positions[3 * b]! - ax, positions[3 * b + 1]! - ay, positions[3 * b + 2]! - az];
+    const [e2x, e2y, e2z] = [positions[3 * c]! - ax, positions[3 * c + 1]! - ay, positions[3 * c + 2]! - az];
+    const [qx, qy, qz] = [contacts[3 * i]! - ax, contacts[3 * i + 1]! - ay, contacts[3 * i + 2]! - az];
+    const d11 = e1x * e1x + e1y * e1y + e1z * e1z;
+    const d12 = e1x * e2x + e1y * e2y + e1z * e2z;
+    const d22 = e2x * e2x + e2y * e2y + e2z * e2z;
+    const q1 = qx * e1x + qy * e1y + qz * e1z;
+    const q2 = qx * e2x + qy * e2y + qz * e2z;
+    const det = d11 * d22 - d12 * d12;
+    if (!(det > 0)) {
+      out[2 * i] = out[2 * i + 1] = NaN;
+      continue;
+    }
+    const l1 = (d22 * q1 - d12 * q2) / det;
+    const l2 = (d11 * q2 - d12 * q1) / det;
+    const l0 = 1 - l1 - l2;
+    out[2 * i] = l0 * field[2 * a]! + l1 * field[2 * b]! + l2 * field[2 * c]!;
+    out[2 * i + 1] = l0 * field[2 * a + 1]! + l1 * field[2 * b + 1]! + l2 * field[2 * c + 1]!;
   }
   return out;
 }
 
+/** How far ahead of the last match a path point's move may lie (moves split to clear a facet). */
+const MATCH_LOOKAHEAD = 64;
+
 /**
- * For each path point (cutter contact), the toolpath move nearest to it, matched monotonically:
- * the moves follow the path in order (with lead-in/out moves before and after).
+ * For each path point, its toolpath move: the one whose ball centre (tip + R·axis) is nearest the
+ * point's designed centre (contact + R·normal), matched in order. Clearing the facets moves a
+ * centre by far less than the spacing of the points and adds a few moves between them, so the
+ * nearest of the next moves is the point's own. (Matching contacts to tips instead jumps between
+ * rings where the surface slopes: a tip lies up to R·|n − z| from its contact.)
  */
-export function matchMoves(contacts: Float64Array, tips: Float64Array): Uint32Array {
+export function matchMoves(
+  contacts: Float64Array,
+  normals: Float64Array,
+  tips: Float64Array,
+  axes: Float64Array,
+  radius: number,
+): Uint32Array {
   const points = contacts.length / 3;
   const moves = tips.length / 3;
   const out = new Uint32Array(points);
   if (moves === 0) return out;
-  const d2 = (i: number, j: number) =>
-    (contacts[3 * i]! - tips[3 * j]!) ** 2 + (contacts[3 * i + 1]! - tips[3 * j + 1]!) ** 2 + (contacts[3 * i + 2]! - tips[3 * j + 2]!) ** 2;
+  const d2 = (i: number, m: number) => {
+    let d = 0;
+    for (let c = 0; c < 3; c++) {
+      const designed = contacts[3 * i + c]! + radius * normals[3 * i + c]!;
+      const centre = tips[3 * m + c]! + radius * axes[3 * m + c]!;
+      d += (designed - centre) ** 2;
+    }
+    return d;
+  };
+  // The first point: any of the moves that can be lead-in (at most moves − points of them) or just after.
   let j = 0;
-  // The first contact: the nearest of the moves that can be lead-in (at most moves − points of them).
-  const leadIn = Math.max(1, moves - points + 1);
-  for (let k = 1; k < Math.min(moves, leadIn); k++) if (d2(0, k) < d2(0, j)) j = k;
+  let reach = Math.max(1, moves - points + MATCH_LOOKAHEAD);
   for (let i = 0; i < points; i++) {
-    while (j + 1 < moves && d2(i, j + 1) <= d2(i, j)) j++;
-    out[i] = j;
+    let [best, bestD] = [j, d2(i, j)];
+    for (let m = j + 1; m < Math.min(moves, j + 1 + reach); m++) {
+      const d = d2(i, m);
+      if (d < bestD) [best, bestD] = [m, d];
+    }
+    out[i] = j = best;
+    reach = MATCH_LOOKAHEAD;
   }
   return out;
 }
