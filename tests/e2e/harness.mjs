@@ -36,8 +36,11 @@ export function serve(dir) {
   );
 }
 
-/** Headless Debian Chromium with a fresh profile; WebGL through SwiftShader so canvases render. */
-export async function launch() {
+/**
+ * Headless Debian Chromium with a fresh profile; WebGL through SwiftShader so canvases render.
+ * `extraArgs`: more command-line switches (the page benchmark measures the heap with them).
+ */
+export async function launch(extraArgs = []) {
   const profile = mkdtempSync(join(tmpdir(), "slitpath-e2e-"));
   const context = await chromium.launchPersistentContext(profile, {
     executablePath: "/usr/bin/chromium",
@@ -56,6 +59,7 @@ export async function launch() {
       "--use-gl=angle",
       "--use-angle=swiftshader",
       "--enable-unsafe-swiftshader",
+      ...extraArgs,
     ],
   });
   return {
@@ -142,13 +146,15 @@ export function pageTimeline(page) {
   });
 }
 
-/** The planner's own time (the report's total, ms) and its memory (MiB), as the metrics panel shows them. */
+/**
+ * The planner's own time (the report's total, ms), its stage timings (ms) and its memory (MiB), as
+ * the metrics panel shows them.
+ */
 export async function plannerFigures(page) {
   const timings = (await page.getByTestId("metric-timings").textContent()) ?? "";
   const memory = (await page.getByTestId("metric-memory").textContent().catch(() => "")) ?? "";
-  const number = (text, pattern) => {
-    const m = text.match(pattern);
-    return m ? Number(m[1].replace(/,/g, "")) : null;
-  };
-  return { plannerMs: number(timings, /total ([\d,]+)/), wasmMiB: number(memory, /([\d,]+) MiB/) };
+  const number = (text) => Number(text.replace(/,/g, ""));
+  const stages = Object.fromEntries([...timings.matchAll(/(\w+) ([\d,]+)/g)].map((m) => [m[1], number(m[2])]));
+  const mib = memory.match(/([\d,]+) MiB/);
+  return { plannerMs: stages.total ?? null, stages, wasmMiB: mib ? number(mib[1]) : null };
 }
