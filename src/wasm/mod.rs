@@ -270,6 +270,25 @@ impl Planner {
         self.mesh().1.triangles.iter().flatten().copied().collect()
     }
 
+    /// Unit vertex normals (angle-weighted, towards the tool side), flat `[x0, y0, z0, …]`, for
+    /// shading.
+    pub fn normals(&self) -> Vec<f32> {
+        self.mesh().1.vertex_normals.iter().flat_map(|n| n.as_vec3().to_array()).collect()
+    }
+
+    /// The boundary loops' vertices, loop after loop (the outer loop first, then the holes in the
+    /// order `hole:N` counts them); [`Planner::loop_lengths`] splits them.
+    #[wasm_bindgen(js_name = loopVertices)]
+    pub fn loop_vertices(&self) -> Vec<u32> {
+        self.mesh().1.loops.iter().flatten().copied().collect()
+    }
+
+    /// The number of vertices of each boundary loop.
+    #[wasm_bindgen(js_name = loopLengths)]
+    pub fn loop_lengths(&self) -> Vec<u32> {
+        self.mesh().1.loops.iter().map(|l| l.len() as u32).collect()
+    }
+
     /// Flattened positions (BFF, seed 000 §2.1), flat `[u0, v0, u1, …]`, same vertex order.
     /// Factorises once per part; throws for a surface that cannot be planned (closed, genus > 0).
     pub fn flattened(&mut self) -> Result<Vec<f64>, JsError> {

@@ -49,6 +49,10 @@ export interface SurfaceMesh {
   positions: Float32Array;
   /** Three vertex indices per triangle. */
   triangles: Uint32Array;
+  /** Unit vertex normals, xyz per vertex. */
+  normals: Float32Array;
+  /** Boundary loops (vertex indices): the outer loop, then the holes in the order `hole:N` counts them. */
+  loops: Uint32Array[];
 }
 
 /** Where the spiral is centred: see the CLI's `--origin`. */
@@ -225,7 +229,10 @@ export class Part {
   }
 
   surface(): SurfaceMesh {
-    return { positions: this.planner.positions(), triangles: this.planner.triangles() };
+    const vertices = this.planner.loopVertices();
+    let start = 0;
+    const loops = [...this.planner.loopLengths()].map((n) => vertices.slice(start, (start += n)));
+    return { positions: this.planner.positions(), triangles: this.planner.triangles(), normals: this.planner.normals(), loops };
   }
 
   /** Flattened uv per vertex; throws for a surface that cannot be planned. */

@@ -1,5 +1,5 @@
 // Arrays ready for WebGL, built in the worker so the page's main thread only hands them to the
-// GPU: polylines with a colour per vertex, the slit domain's rings, the heat map, vertex normals.
+// GPU: polylines with a colour per vertex, the slit domain's rings, the heat map, loop edges.
 
 import { heatColour, pathColour } from "./colors";
 import { simplify } from "./simplify";
@@ -92,29 +92,6 @@ export function heatColours(scallop: Float64Array, limit: number): Float32Array 
   const out = new Float32Array(scallop.length * 3);
   for (let v = 0; v < scallop.length; v++) out.set(heatColour(scallop[v]!, limit), 3 * v);
   return out;
-}
-
-/** Area-weighted vertex normals (unit; +Z where a vertex has no face), for shading. */
-export function vertexNormals(positions: Float32Array, triangles: Uint32Array): Float32Array {
-  const normals = new Float32Array(positions.length);
-  for (let t = 0; t < triangles.length; t += 3) {
-    const [a, b, c] = [3 * triangles[t]!, 3 * triangles[t + 1]!, 3 * triangles[t + 2]!];
-    const [ux, uy, uz] = [positions[b]! - positions[a]!, positions[b + 1]! - positions[a + 1]!, positions[b + 2]! - positions[a + 2]!];
-    const [vx, vy, vz] = [positions[c]! - positions[a]!, positions[c + 1]! - positions[a + 1]!, positions[c + 2]! - positions[a + 2]!];
-    // The cross product's length is twice the area: the sum weighs faces by area.
-    const [nx, ny, nz] = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx];
-    for (const v of [a, b, c]) {
-      normals[v] = normals[v]! + nx;
-      normals[v + 1] = normals[v + 1]! + ny;
-      normals[v + 2] = normals[v + 2]! + nz;
-    }
-  }
-  for (let v = 0; v < normals.length; v += 3) {
-    const l = Math.hypot(normals[v]!, normals[v + 1]!, normals[v + 2]!);
-    if (l > 0) for (let c = 0; c < 3; c++) normals[v + c] = normals[v + c]! / l;
-    else normals[v + 2] = 1;
-  }
-  return normals;
 }
 
 /** The edges of boundary loops as vertex index pairs (each loop closed). */

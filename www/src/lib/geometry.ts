@@ -1,36 +1,6 @@
-// Mesh helpers of the worker: boundary loops, point location in a planar image of the mesh (slit
-// domain → flattened domain), path points carried to the flattened plane through their faces,
+// Mesh helpers of the worker: point location in a planar image of the mesh (slit domain →
+// flattened domain), path points carried to the flattened plane through their faces,
 // and the path-point → toolpath-move match.
-
-/** Boundary loops as vertex index lists (edges used by one triangle, chained), longest first. */
-export function boundaryLoops(triangles: Uint32Array): Uint32Array[] {
-  const key = (a: number, b: number) => a * 0x100000000 + b;
-  const directed = new Set<number>();
-  for (let t = 0; t < triangles.length; t += 3) {
-    for (let k = 0; k < 3; k++) directed.add(key(triangles[t + k]!, triangles[t + ((k + 1) % 3)]!));
-  }
-  // A boundary edge a→b has no twin b→a; follow them head to tail.
-  const next = new Map<number, number>();
-  for (const e of directed) {
-    const a = Math.floor(e / 0x100000000);
-    const b = e - a * 0x100000000;
-    if (!directed.has(key(b, a))) next.set(a, b);
-  }
-  const loops: Uint32Array[] = [];
-  const seen = new Set<number>();
-  for (const start of [...next.keys()].sort((x, y) => x - y)) {
-    if (seen.has(start)) continue;
-    const loop: number[] = [];
-    let v: number | undefined = start;
-    while (v !== undefined && !seen.has(v)) {
-      seen.add(v);
-      loop.push(v);
-      v = next.get(v);
-    }
-    loops.push(Uint32Array.from(loop));
-  }
-  return loops.sort((a, b) => b.length - a.length);
-}
 
 /** Point location in a planar image of the mesh (`xy` per vertex), by a uniform grid of triangles. */
 export class PlanarLocator {

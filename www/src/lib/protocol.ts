@@ -12,9 +12,9 @@ export interface LoadedPart {
   positions: Float32Array;
   /** Three vertex indices per triangle. */
   triangles: Uint32Array;
-  /** Unit vertex normals (area-weighted), xyz per vertex, for shading. */
+  /** Unit vertex normals, xyz per vertex, for shading. */
   normals: Float32Array;
-  /** Boundary loops (vertex indices), the outer (longest) first. */
+  /** Boundary loops (vertex indices): the outer loop, then the holes in the order `hole:N` counts them. */
   loops: Uint32Array[];
   /** Flattened uv per vertex; null when the surface cannot be flattened (see conformalError). */
   uv: Float64Array | null;

@@ -8,8 +8,8 @@
 
 import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, type PlanOutput } from "../core";
 import { DEFAULT_PLAN_OPTIONS } from "./defaults";
-import { circles, extent, heatColours, loopEdges, pathPolyline, planar, vertexNormals, type Polyline } from "./drawing";
-import { PlanarLocator, boundaryLoops, matchMoves, pathField } from "./geometry";
+import { circles, extent, heatColours, loopEdges, pathPolyline, planar, type Polyline } from "./drawing";
+import { PlanarLocator, matchMoves, pathField } from "./geometry";
 import { buildPointGrid } from "./point-grid";
 import type { LoadedPart, PlanDrawing, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
 
@@ -76,8 +76,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   }
   progress("preparing the views", 5);
   // After flattening: the planner's surface has its hole rims refined and ears split (more vertices).
-  const { positions, triangles } = part.surface();
-  const loops = boundaryLoops(triangles);
+  const { positions, triangles, normals, loops } = part.surface();
   const [outer, ...holes] = loops;
   current = {
     part,
@@ -94,7 +93,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     report: part.report(),
     positions: positions.slice(),
     triangles,
-    normals: vertexNormals(positions, triangles),
+    normals,
     loops,
     uv: uv?.slice() ?? null,
     previewW: previewW?.slice() ?? null,
@@ -111,7 +110,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   const { drawing: d } = loaded;
   post(
     { type: "loaded", id: request.id, part: loaded },
-    buffers(loaded.positions, triangles, loaded.normals, ...loops, loaded.uv, loaded.previewW, d.uv, d.previewW, d.outerEdges, d.holeEdges),
+    buffers(loaded.positions, triangles, normals, ...loops, loaded.uv, loaded.previewW, d.uv, d.previewW, d.outerEdges, d.holeEdges),
   );
 }
 
