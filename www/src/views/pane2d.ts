@@ -1,6 +1,11 @@
 // One pane of the 2D view as three.js objects in the pane's own plane coordinates (uv or w): the
-// domain's triangles filled, its boundary loops (outer dark, holes or slits red), the rings and
-// the path coloured along its length. The view places the group on screen.
+// domain filled, its boundary loops (outer dark, holes or slits red), the rings and the path
+// coloured along its length. The view places the group on screen.
+//
+// The fill is drawn from the loops alone, even-odd through the stencil buffer (a fan of triangles
+// from one vertex over every boundary edge inverts the stencil bit, then a quad fills where it is
+// set and clears it): a few thousand triangles instead of every face. Filling the faces of a
+// 300k-face part took software WebGL 5.6 s for the two panes.
 
 import * as THREE from "three";
 import type { Polyline } from "../lib/index";
@@ -13,6 +18,7 @@ const RING = rawColour(0x1f6feb);
 
 /** Drawn in this order, without depth (a plane). */
 enum Order {
+  Stencil,
   Fill,
   Loops,
   Rings,
@@ -25,16 +31,15 @@ export class Pane2d {
   private rings: THREE.LineSegments | null = null;
   private path: THREE.LineSegments | null = null;
 
-  /** The domain: xyz (z = 0) per vertex, the triangles, and the loops' edges (vertex pairs). */
-  setDomain(positions: Float32Array | null, triangles: Uint32Array, outerEdges: Uint32Array, holeEdges: Uint32Array): void {
+  /** The domain: xyz (z = 0) per vertex, and its loops' edges (vertex pairs): the outer loop's, the holes'. */
+  setDomain(positions: Float32Array | null, outerEdges: Uint32Array, holeEdges: Uint32Array): void {
     this.domain.forEach(dispose);
     this.domain = [];
-    if (positions === null) return;
+    if (positions === null || outerEdges.length === 0) return;
     const position = new THREE.BufferAttribute(positions, 3);
-    const fill = new THREE.Mesh(geometry(position, triangles), new THREE.MeshBasicMaterial({ color: FILL, side: THREE.DoubleSide }));
     const outer = new THREE.LineSegments(geometry(position, outerEdges), new THREE.LineBasicMaterial({ color: OUTER }));
     const holes = new THREE.LineSegments(geometry(position, holeEdges), new THREE.LineBasicMaterial({ color: HOLE }));
-    this.domain = [place(fill, Order.Fill), place(outer, Order.Loops), place(holes, Order.Loops)];
+    this.domain = [...fill(position, [outerEdges, holeEdges]), place(outer, Order.Loops), place(holes, Order.Loops)];
     this.group.add(...this.domain);
   }
 
@@ -57,6 +62,41 @@ export class Pane2d {
     this.path = place(polylineObject(path), Order.Path);
     this.group.add(this.path);
   }
+}
+
+/** The even-odd fill of the region the loop edges bound: the stencil fan, then the quad. */
+function fill(position: THREE.BufferAttribute, edgeLists: Uint32Array[]): THREE.Mesh[] {
+  const edges = edgeLists.reduce((n, e) => n + e.length / 2, 0);
+  const fan = new Uint32Array(3 * edges);
+  const apex = edgeLists[0]![0]!;
+  let k = 0;
+  for (const list of edgeLists) {
+    for (let e = 0; e < list.length; e += 2) [fan[k++], fan[k++], fan[k++]] = [apex, list[e]!, list[e + 1]!];
+  }
+  const invert = new THREE.MeshBasicMaterial({
+    colorWrite: false,
+    side: THREE.DoubleSide,
+    stencilWrite: true,
+    stencilFunc: THREE.AlwaysStencilFunc,
+    stencilZPass: THREE.InvertStencilOp,
+    stencilWriteMask: 1,
+  });
+  const paint = new THREE.MeshBasicMaterial({
+    color: FILL,
+    side: THREE.DoubleSide,
+    stencilWrite: true,
+    stencilRef: 1,
+    stencilFuncMask: 1,
+    stencilFunc: THREE.EqualStencilFunc,
+    stencilZPass: THREE.ZeroStencilOp, // cleared for the other pane
+  });
+  // The quad: the bounding box of the loops' vertices.
+  const box = new THREE.Box3();
+  const v = new THREE.Vector3();
+  for (const list of edgeLists) for (const i of list) box.expandByPoint(v.fromBufferAttribute(position, i));
+  const quad = new THREE.PlaneGeometry(1, 1);
+  quad.scale(box.max.x - box.min.x, box.max.y - box.min.y, 1).translate((box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, 0);
+  return [place(new THREE.Mesh(geometry(position, fan), invert), Order.Stencil), place(new THREE.Mesh(quad, paint), Order.Fill)];
 }
 
 /** A polyline (see lib/drawing) as line segments with a colour per vertex. */

@@ -92,9 +92,9 @@ export class View2d {
     this.flatBox = bounds(part.drawing.uv);
     this.plan = null;
     this.cursor = -1;
-    const { drawing: d, triangles } = part;
-    this.panes.flat.setDomain(d.uv, triangles, d.outerEdges, d.holeEdges);
-    this.panes.slit.setDomain(d.previewW, triangles, d.outerEdges, d.holeEdges);
+    const { drawing: d } = part;
+    this.panes.flat.setDomain(d.uv, d.outerEdges, d.holeEdges);
+    this.panes.slit.setDomain(d.previewW, d.outerEdges, d.holeEdges);
     for (const pane of PANES) {
       this.panes[pane].setRings(null);
       this.panes[pane].setPath(null);
@@ -107,7 +107,7 @@ export class View2d {
     if (part === null) return;
     this.plan = plan;
     const { drawing: d } = plan;
-    this.panes.slit.setDomain(d.w, part.triangles, part.drawing.outerEdges, part.drawing.holeEdges);
+    this.panes.slit.setDomain(d.w, part.drawing.outerEdges, part.drawing.holeEdges);
     this.panes.slit.setRings(d.rings);
     this.panes.flat.setPath(d.flatPath);
     this.panes.slit.setPath(d.slitPath);
@@ -148,7 +148,7 @@ export class View2d {
     this.layer.position.set(w / 2, h / 2, 0);
     const buffer = this.renderer.getDrawingBufferSize(new THREE.Vector2());
     this.target?.dispose();
-    this.target = new THREE.WebGLRenderTarget(buffer.x, buffer.y, { samples: 4 });
+    this.target = new THREE.WebGLRenderTarget(buffer.x, buffer.y, { samples: 4, stencilBuffer: true });
     this.layer.material.map = this.target.texture;
     this.layer.material.needsUpdate = true;
     this.restale();

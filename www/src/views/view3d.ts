@@ -6,11 +6,13 @@
 // The planner worker prepares every array drawn (normals, heat colours, the path at two levels of
 // detail), so nothing here walks the mesh or the whole path: the path is drawn whole near the
 // part and decimated seen from afar, and the hover picks on the decimated one, then among the
-// few points it stands for.
+// few points it stands for. The part, path and needles are drawn into a layer with its depth
+// when they or the camera change; moving the tool draws that layer and the tool only.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { SURFACE } from "../lib/colors";
+import { DepthLayer } from "./depth-layer";
 import type { ElementProxy } from "./element-proxy";
 import { dispose, polylineObject } from "./pane2d";
 import type { Layers, PartView, PlanView } from "./render-protocol";
@@ -30,6 +32,11 @@ export class View3d {
   private pathCoarse: THREE.LineSegments | null = null;
   private needles: THREE.LineSegments | null = null;
   private readonly tool = new THREE.Group();
+  /** The tool's own scene (drawn over the layer), with lights like the part's. */
+  private readonly toolScene = new THREE.Scene();
+  private readonly toolSun = new THREE.DirectionalLight(0xffffff, 1.6);
+  private readonly layer = new DepthLayer();
+  private layerStale = true;
   private plan: PlanView | null = null;
   private cursor = -1;
   /** Camera distance of the last fit: the full path is drawn nearer than half of it. */
@@ -54,14 +61,14 @@ export class View3d {
     this.camera.up.set(0, 0, 1); // machine convention: Z is the tool axis
     this.controls = new OrbitControls(this.camera, element as unknown as HTMLElement);
     this.controls.enableDamping = false;
-    this.controls.addEventListener("change", () => this.invalidate());
+    this.controls.addEventListener("change", () => this.invalidate(true));
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6));
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
-    sun.position.set(1, -2, 3);
+    sun.position.copy(SUN);
     this.camera.add(sun); // the light follows the camera: no dark side when orbiting
     this.scene.add(this.camera, this.content);
     this.tool.visible = false;
-    this.scene.add(this.tool);
+    this.toolScene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6), this.toolSun, this.tool);
     element.addEventListener("pointermove", (event) => {
       if ((event as PointerEvent).buttons === 0) this.hover(event as PointerEvent);
     });
@@ -73,7 +80,9 @@ export class View3d {
     this.renderer.setSize(width, height, false);
     this.camera.aspect = width / height;
     this.camera.updateProjectionMatrix();
-    this.invalidate();
+    const buffer = this.renderer.getDrawingBufferSize(new THREE.Vector2());
+    this.layer.resize(buffer.x, buffer.y);
+    this.invalidate(true);
   }
 
   /** Shows a newly loaded part (and forgets the previous plan). */
@@ -101,6 +110,7 @@ export class View3d {
     this.surface = new THREE.Mesh(geometry, material);
     this.content.add(this.surface);
     this.fit();
+    this.invalidate(true);
   }
 
   /** Shows a plan of the current part: heat map, path, needles, tool. */
@@ -115,6 +125,7 @@ export class View3d {
     this.makeTool(plan.radiusMm);
     this.applyLayers();
     this.setCursor(0);
+    this.invalidate(true);
   }
 
   setLayers(layers: Layers): void {
@@ -153,14 +164,22 @@ export class View3d {
     this.controls.update();
     this.fitDistance = distance;
     this.placeLevels();
-    this.invalidate();
+    this.invalidate(true);
   }
 
   /** Renders when something changed; the tool tip's place on screen (CSS pixels), if shown. */
   render(): [number, number] | null | undefined {
     if (!this.stale) return undefined;
     this.stale = false;
-    this.renderer.render(this.scene, this.camera);
+    if (this.layerStale) {
+      this.layer.capture(this.renderer, this.scene, this.camera);
+      this.layerStale = false;
+    }
+    this.layer.draw(this.renderer);
+    this.toolSun.position.copy(this.camera.localToWorld(SUN.clone()));
+    this.renderer.autoClear = false;
+    this.renderer.render(this.toolScene, this.camera);
+    this.renderer.autoClear = true;
     if (!this.tool.visible) return null;
     const p = this.tool.position.clone().project(this.camera);
     return [((p.x + 1) / 2) * this.element.clientWidth, ((1 - p.y) / 2) * this.element.clientHeight];
@@ -175,7 +194,9 @@ export class View3d {
     return readPixels(this.renderer, x, y, width, height);
   }
 
-  private invalidate(): void {
+  /** Something changed: the tool only, or (`layer`) what the layer holds. */
+  private invalidate(layer = false): void {
+    this.layerStale ||= layer;
     this.stale = true;
     this.requestRender();
   }
@@ -273,7 +294,7 @@ export class View3d {
     this.paintHeat();
     if (this.path) this.path.visible = this.layers.path;
     if (this.needles) this.needles.visible = this.layers.needles;
-    this.invalidate();
+    this.invalidate(true);
   }
 
   private clear(): void {
@@ -285,6 +306,9 @@ export class View3d {
     this.colours = this.plainColours = null;
   }
 }
+
+/** The light that follows the camera, in the camera's frame. */
+const SUN = new THREE.Vector3(1, -2, 3);
 
 /** RGBA of a region of a renderer's canvas (CSS pixels, rows top first; needs preserveDrawingBuffer). */
 export function readPixels(renderer: THREE.WebGLRenderer, x: number, y: number, width: number, height: number): { width: number; height: number; data: Uint8Array } {
