@@ -73,17 +73,22 @@ export function planar(xy: Float64Array): Float32Array {
   return out;
 }
 
-/** Circles of the given radii about the origin as line segments (xyz pairs), `sides` each. */
-export function circles(radii: Float64Array, sides = 180): Float32Array {
-  const out = new Float32Array(radii.length * sides * 6);
+/**
+ * Circles of the given radii about the origin as line segments (xyz pairs), each with as many
+ * sides as keep its chords within `tolerance` of it (8 at least).
+ */
+export function circles(radii: Float64Array, tolerance: number): Float32Array {
+  const sides = [...radii].map((r) => (r > tolerance ? Math.max(8, Math.ceil(Math.PI / Math.acos(1 - tolerance / r))) : 8));
+  const out = new Float32Array(sides.reduce((n, k) => n + 6 * k, 0));
   let o = 0;
-  for (const r of radii) {
-    for (let k = 0; k < sides; k++) {
-      const [a, b] = [(2 * Math.PI * k) / sides, (2 * Math.PI * (k + 1)) / sides];
+  radii.forEach((r, i) => {
+    const k = sides[i]!;
+    for (let j = 0; j < k; j++) {
+      const [a, b] = [(2 * Math.PI * j) / k, (2 * Math.PI * (j + 1)) / k];
       out.set([r * Math.cos(a), r * Math.sin(a), 0, r * Math.cos(b), r * Math.sin(b), 0], o);
       o += 6;
     }
-  }
+  });
   return out;
 }
 

@@ -116,18 +116,18 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
 
 /** The views' arrays of a plan (see PlanDrawing). */
 function drawing(output: PlanOutput, pathUv: Float64Array, scallopMm: number): PlanDrawing {
-  const d: PlanDrawing = {
+  const slit = PANE_TOLERANCE * extent(output.pathW, 2);
+  return {
     heat: heatColours(output.vertexScallop, scallopMm),
     path: pathPolyline(output.pathContacts, 3, 0),
     pathCoarse: pathPolyline(output.pathContacts, 3, COARSE_3D_TOLERANCE * extent(output.pathContacts, 3)),
     flatPath: pathPolyline(pathUv, 2, PANE_TOLERANCE * extent(pathUv, 2)),
-    slitPath: pathPolyline(output.pathW, 2, PANE_TOLERANCE * extent(output.pathW, 2)),
+    slitPath: pathPolyline(output.pathW, 2, slit),
     flatGrid: buildPointGrid(pathUv),
     slitGrid: buildPointGrid(output.pathW),
     w: planar(output.w),
-    rings: circles(output.ringRadii),
+    rings: circles(output.ringRadii, slit),
   };
-  return d;
 }
 
 function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {

@@ -9,6 +9,7 @@
 
 import * as THREE from "three";
 import type { Polyline } from "../lib/index";
+import { dispose, geometry, polylineObject } from "./objects";
 import { rawColour } from "./raw-colour";
 
 const FILL = rawColour(0xdde3ec);
@@ -99,20 +100,6 @@ function fill(position: THREE.BufferAttribute, edgeLists: Uint32Array[]): THREE.
   return [place(new THREE.Mesh(geometry(position, fan), invert), Order.Stencil), place(new THREE.Mesh(quad, paint), Order.Fill)];
 }
 
-/** A polyline (see lib/drawing) as line segments with a colour per vertex. */
-export function polylineObject(p: Polyline): THREE.LineSegments {
-  const g = geometry(new THREE.BufferAttribute(p.positions, 3), p.segments);
-  g.setAttribute("color", new THREE.BufferAttribute(p.colours, 3));
-  return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ vertexColors: true }));
-}
-
-function geometry(position: THREE.BufferAttribute, index: Uint32Array): THREE.BufferGeometry {
-  const g = new THREE.BufferGeometry();
-  g.setAttribute("position", position);
-  g.setIndex(new THREE.BufferAttribute(index, 1));
-  return g;
-}
-
 function place<T extends THREE.Object3D>(object: T, order: Order): T {
   object.renderOrder = order;
   object.frustumCulled = false; // the pane shows its whole domain: no bounding spheres to compute
@@ -120,16 +107,4 @@ function place<T extends THREE.Object3D>(object: T, order: Order): T {
   material.depthTest = false;
   material.depthWrite = false;
   return object;
-}
-
-export function dispose(object: THREE.Object3D | null): void {
-  if (object === null) return;
-  object.removeFromParent();
-  object.traverse((node) => {
-    const mesh = node as Partial<THREE.Mesh>;
-    mesh.geometry?.dispose();
-    const material = mesh.material;
-    if (Array.isArray(material)) material.forEach((m) => m.dispose());
-    else material?.dispose();
-  });
 }

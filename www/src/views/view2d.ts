@@ -1,5 +1,6 @@
-// The 2D view (three.js, WebGL, in the render worker): left the flattened domain S^F, right the slit domain (unit disk
-// or annulus with arc slits), each with the spiral; the slit domain also shows the rings. Hovering
+// The 2D view (three.js, WebGL, in the render worker): left the flattened domain S^F, right the
+// slit domain (unit disk or annulus with arc slits), each with the spiral; the slit domain also
+// shows the rings. Hovering
 // either pane highlights the nearest path point in both (and reports it, for the 3D tool);
 // clicking sets the pole by hand.
 //
@@ -15,7 +16,7 @@ import { dot, ring, star } from "./markers";
 import { Pane2d } from "./pane2d";
 import { rawColour } from "./raw-colour";
 import type { PartView, PlanView } from "./render-protocol";
-import { readPixels } from "./view3d";
+import { readPixels } from "./read-pixels";
 
 export type Pane = "flat" | "slit";
 const PANES: Pane[] = ["flat", "slit"];
