@@ -4,7 +4,8 @@
 // print the wall time from the choice, the planner's own time (its report), the sum and the
 // longest of the main thread's long tasks meanwhile, and the planner's peak wasm memory. Then, in
 // the same run, the native CLI on the same part and options, one thread (as in the browser), for
-// wasm/native per stage; and for the 40k part, ten re-plans: the page's heap (after a GC) and the
+// wasm/native per stage; the frames the views draw per second while scrubbing and while hovering
+// (software WebGL here: a GPU draws faster); and for the 40k part, ten re-plans: the page's heap (after a GC) and the
 // planner's memory after each. Figures only: nothing is asserted (tests/e2e/large-part.test.mjs
 // holds the test thresholds).
 //
@@ -33,6 +34,38 @@ function native(file, scallop) {
   const report = join(output, "bench-native-report.json");
   cli("plan", file, "--radius", "3", "--scallop", String(scallop), "-o", join(output, "bench-native.ngc"), "--report", report);
   return JSON.parse(readFileSync(report, "utf8")).timings_ms;
+}
+
+/**
+ * Frames the views draw per second while the scrub bar moves on every animation frame of the page
+ * for 2 s (each frame a new tool position), and while the pointer sweeps the 2D view.
+ */
+async function interaction(page) {
+  const frames = () => page.evaluate(() => Number(document.querySelector("[data-testid=view-3d]").dataset.frame));
+  let before = await frames();
+  await page.evaluate(async () => {
+    const scrub = document.querySelector("[data-testid=scrub]");
+    const points = Number(scrub.max) + 1;
+    const end = performance.now() + 2000;
+    for (let i = 0; performance.now() < end; i++) {
+      scrub.value = String(Math.floor(((i * 997) % 1000) * (points / 1000)));
+      scrub.dispatchEvent(new Event("input", { bubbles: true }));
+      await new Promise(requestAnimationFrame);
+    }
+  });
+  await page.waitForTimeout(200);
+  const scrubFps = ((await frames()) - before) / 2;
+  await page.getByTestId("view-2d").scrollIntoViewIfNeeded();
+  const box = await page.getByTestId("view-2d").boundingBox();
+  before = await frames();
+  const start = Date.now();
+  for (let i = 0; Date.now() - start < 2000; i++) {
+    const t = (i % 200) / 200;
+    await page.mouse.move(box.x + box.width * (0.1 + 0.8 * t), box.y + box.height * (0.3 + 0.4 * Math.sin(7 * t) ** 2));
+  }
+  await page.waitForTimeout(200);
+  const hoverFps = ((await frames()) - before) / ((Date.now() - start - 200) / 1000);
+  return { scrubFps, hoverFps };
 }
 
 /** Ten re-plans (h alternating by 5 %): the page's JS heap after a GC, and the planner's memory, after each. */
@@ -78,6 +111,7 @@ try {
       const timeline = await pageTimeline(page);
       const figures = failed ? { plannerMs: null, stages: {}, wasmMiB: null } : await plannerFigures(page);
       const row = { ...c, faces, ...timeline, ...figures, failed, native: native(file, c.scallop) };
+      if (!failed) Object.assign(row, await interaction(page));
       if (c.replans && !failed) row.replans = await replans(page, c.scallop, c.replans);
       rows.push(row);
     } finally {
@@ -90,13 +124,13 @@ try {
 
 const f = (v, digits = 0) => (v === null || v === undefined || Number.isNaN(v) ? "—" : v.toFixed(digits));
 console.log("page benchmark, headless Chromium (R 3 mm; times in s, memory MiB)");
-console.log("case          faces      h   choice→planned  planner  long tasks (n, sum, max)   wasm MiB");
+console.log("case          faces      h   choice→planned  planner  long tasks (n, sum, max)   wasm MiB   frames/s scrub, hover");
 for (const r of rows) {
   const s = (ms) => (ms === null || ms === undefined ? null : ms / 1000);
   console.log(
     `${r.name.padEnd(12)} ${String(r.faces).padStart(6)}  ${r.scallop.toFixed(3)}  ${f(s(r.chosenToPlannedMs), 2).padStart(14)}  ${f(s(r.plannerMs), 2).padStart(7)}  ${String(
       r.longTasks,
-    ).padStart(5)} ${f(r.longTaskSumMs / 1000, 2).padStart(7)} ${f(r.longTaskMaxMs / 1000, 3).padStart(8)}   ${f(r.wasmMiB).padStart(8)}${r.failed ? `  (${r.failed})` : ""}`,
+    ).padStart(5)} ${f(r.longTaskSumMs / 1000, 2).padStart(7)} ${f(r.longTaskMaxMs / 1000, 3).padStart(8)}   ${f(r.wasmMiB).padStart(8)}   ${f(r.scrubFps).padStart(8)} ${f(r.hoverFps).padStart(6)}${r.failed ? `  (${r.failed})` : ""}`,
   );
 }
 console.log("\nplanner stages, wasm in the page / native CLI on one thread, same part and options, this run (ms)");

@@ -11,6 +11,7 @@
 
 import * as THREE from "three";
 import { nearestPoint } from "../lib/point-grid";
+import { around, drawIn, type Rect } from "./dirty-rects";
 import type { ElementProxy } from "./element-proxy";
 import { dot, ring, star } from "./markers";
 import { Pane2d } from "./pane2d";
@@ -35,6 +36,8 @@ const MARGIN = 14;
 const TITLE = 22;
 /** Hover reach, CSS pixels. */
 const REACH = 24;
+/** Half the side of the square a cursor dot is drawn in (its radius is 6.25 px), CSS pixels. */
+const DOT_REACH = 10;
 const BACKGROUND = 0xf7f8fa;
 
 export class View2d {
@@ -61,6 +64,8 @@ export class View2d {
   private size = { w: 1, h: 1 };
   private layerStale = true;
   private stale = true;
+  /** Where the last frame drew the cursor dots; undefined: the next frame draws everything. */
+  private cursorRects: Rect[] | undefined = undefined;
 
   /** Hover: the path point nearest the pointer. */
   onCursor: (index: number) => void = () => {};
@@ -118,6 +123,7 @@ export class View2d {
   /** The pole picked by hand (flattened plane), or null for an automatic origin. */
   setPicked(pole: [number, number] | null): void {
     this.picked = pole;
+    this.cursorRects = undefined;
     this.invalidate();
   }
 
@@ -135,6 +141,7 @@ export class View2d {
   private restale(): void {
     this.layout();
     this.layerStale = true;
+    this.cursorRects = undefined;
     this.invalidate();
   }
 
@@ -235,7 +242,11 @@ export class View2d {
       this.layerStale = false;
     }
     const cursors = this.placeMarkers();
-    this.renderer.render(this.overlay, this.camera);
+    const rects = Object.values(cursors).map((at) => around(at, DOT_REACH));
+    const draw = () => this.renderer.render(this.overlay, this.camera);
+    if (this.cursorRects === undefined) draw();
+    else drawIn(this.renderer, [...this.cursorRects, ...rects], this.size.w, this.size.h, draw);
+    this.cursorRects = rects;
     return cursors;
   }
 

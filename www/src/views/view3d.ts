@@ -13,6 +13,7 @@ import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { SURFACE } from "../lib/colors";
 import { DepthLayer } from "./depth-layer";
+import { drawIn, type Rect } from "./dirty-rects";
 import type { ElementProxy } from "./element-proxy";
 import { dispose, polylineObject } from "./objects";
 import { readPixels } from "./read-pixels";
@@ -38,6 +39,8 @@ export class View3d {
   private readonly toolSun = new THREE.DirectionalLight(0xffffff, 1.6);
   private readonly layer = new DepthLayer();
   private layerStale = true;
+  /** Where the last frame drew the tool (null: nowhere); undefined: the next frame draws everything. */
+  private toolRect: Rect | null | undefined = undefined;
   private plan: PlanView | null = null;
   private cursor = -1;
   /** Camera distance of the last fit: the full path is drawn nearer than half of it. */
@@ -172,22 +175,42 @@ export class View3d {
   render(): [number, number] | null | undefined {
     if (!this.stale) return undefined;
     this.stale = false;
+    const whole = this.layerStale || this.toolRect === undefined;
     if (this.layerStale) {
       this.layer.capture(this.renderer, this.scene, this.camera);
       this.layerStale = false;
     }
-    this.layer.draw(this.renderer);
     this.toolSun.position.copy(this.camera.localToWorld(SUN.clone()));
-    this.renderer.autoClear = false;
-    this.renderer.render(this.toolScene, this.camera);
-    this.renderer.autoClear = true;
+    const draw = () => {
+      this.layer.draw(this.renderer);
+      this.renderer.autoClear = false;
+      this.renderer.render(this.toolScene, this.camera);
+      this.renderer.autoClear = true;
+    };
+    const rect = this.tool.visible ? this.toolOnScreen() : null;
+    const { clientWidth: w, clientHeight: h } = this.element;
+    if (whole) draw();
+    else drawIn(this.renderer, [this.toolRect, rect].filter((r): r is Rect => r != null), w, h, draw);
+    this.toolRect = rect;
     if (!this.tool.visible) return null;
     const p = this.tool.position.clone().project(this.camera);
     return [((p.x + 1) / 2) * this.element.clientWidth, ((1 - p.y) / 2) * this.element.clientHeight];
   }
 
-  get cursorIndex(): number {
-    return this.cursor;
+  /** The tool's box on screen (CSS pixels, a few pixels wider); the whole canvas when it reaches behind the camera. */
+  private toolOnScreen(): Rect {
+    const { clientWidth: w, clientHeight: h } = this.element;
+    const box = new THREE.Box3().setFromObject(this.tool);
+    this.camera.updateMatrixWorld();
+    let [x0, y0, x1, y1] = [Infinity, Infinity, -Infinity, -Infinity];
+    const p = new THREE.Vector3();
+    for (let k = 0; k < 8; k++) {
+      p.set(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y, k & 4 ? box.max.z : box.min.z).project(this.camera);
+      if (p.z < -1 || p.z > 1) return { x: 0, y: 0, w, h };
+      [x0, x1] = [Math.min(x0, ((p.x + 1) / 2) * w), Math.max(x1, ((p.x + 1) / 2) * w)];
+      [y0, y1] = [Math.min(y0, ((1 - p.y) / 2) * h), Math.max(y1, ((1 - p.y) / 2) * h)];
+    }
+    return { x: x0 - 3, y: y0 - 3, w: x1 - x0 + 6, h: y1 - y0 + 6 };
   }
 
   /** RGBA of a region of the last frame (CSS pixels, rows top first). */
@@ -198,6 +221,7 @@ export class View3d {
   /** Something changed: the tool only, or (`layer`) what the layer holds. */
   private invalidate(layer = false): void {
     this.layerStale ||= layer;
+    if (layer) this.toolRect = undefined;
     this.stale = true;
     this.requestRender();
   }
