@@ -1,7 +1,8 @@
 // The page benchmark (`npm run bench:page`, also part of `npm run bench`): the built page (www/dist)
 // in Debian's headless Chromium, as a user meets it. For each generated part: open the page (the
 // sample plans first), choose the STL in the file input, wait for "planned" (the plan drawn), and
-// print the wall time from the choice, the planner's own time (its report), the sum and the
+// print the wall time from the choice to "planning" (the part read, checked, flattened, factorised
+// and shown) and to "planned", the planner's own time (its report), the sum and the
 // longest of the main thread's long tasks meanwhile, and the planner's peak wasm memory. Then, in
 // the same run, the native CLI on the same part and options, one thread (as in the browser), for
 // wasm/native per stage; the frames the views draw per second while scrubbing and while hovering
@@ -124,11 +125,11 @@ try {
 
 const f = (v, digits = 0) => (v === null || v === undefined || Number.isNaN(v) ? "—" : v.toFixed(digits));
 console.log("page benchmark, headless Chromium (R 3 mm; times in s, memory MiB)");
-console.log("case          faces      h   choice→planned  planner  long tasks (n, sum, max)   wasm MiB   frames/s scrub, hover");
+console.log("case          faces      h  choice→loaded  →planned  planner  long tasks (n, sum, max)   wasm MiB   frames/s scrub, hover");
 for (const r of rows) {
   const s = (ms) => (ms === null || ms === undefined ? null : ms / 1000);
   console.log(
-    `${r.name.padEnd(12)} ${String(r.faces).padStart(6)}  ${r.scallop.toFixed(3)}  ${f(s(r.chosenToPlannedMs), 2).padStart(14)}  ${f(s(r.plannerMs), 2).padStart(7)}  ${String(
+    `${r.name.padEnd(12)} ${String(r.faces).padStart(6)}  ${r.scallop.toFixed(3)}  ${f(s(r.chosenToLoadedMs), 2).padStart(13)}  ${f(s(r.chosenToPlannedMs), 2).padStart(8)}  ${f(s(r.plannerMs), 2).padStart(7)}  ${String(
       r.longTasks,
     ).padStart(5)} ${f(r.longTaskSumMs / 1000, 2).padStart(7)} ${f(r.longTaskMaxMs / 1000, 3).padStart(8)}   ${f(r.wasmMiB).padStart(8)}   ${f(r.scrubFps).padStart(8)} ${f(r.hoverFps).padStart(6)}${r.failed ? `  (${r.failed})` : ""}`,
   );

@@ -107,12 +107,13 @@ export function screenshotPath(name) {
 
 /**
  * Records, in the page, the main thread's long tasks (PerformanceObserver 'longtask'), when a file
- * was chosen in the STL input and when the status first read "planned" after that. Call before
+ * was chosen in the STL input, and when the status first read "planning" (the part loaded) and
+ * "planned" after that. Call before
  * page.goto; read with pageTimeline(page).
  */
 export async function recordTimeline(page) {
   await page.addInitScript(() => {
-    const t = (window.__timeline = { longTasks: [], chosen: null, planned: null });
+    const t = (window.__timeline = { longTasks: [], chosen: null, loaded: null, planned: null });
     new PerformanceObserver((list) => {
       for (const e of list.getEntries()) t.longTasks.push({ start: e.startTime, duration: e.duration });
     }).observe({ type: "longtask", buffered: true });
@@ -121,23 +122,27 @@ export async function recordTimeline(page) {
       (event) => {
         if (event.target?.id !== "stl-input") return;
         t.chosen = performance.now();
-        t.planned = null;
+        t.loaded = t.planned = null;
       },
       true,
     );
     new MutationObserver(() => {
       const status = document.getElementById("status")?.textContent ?? "";
-      if (t.chosen !== null && t.planned === null && status === "planned") t.planned = performance.now();
+      if (t.chosen === null) return;
+      // The part is loaded (and shown) when planning starts.
+      if (t.loaded === null && status === "planning") t.loaded = performance.now();
+      if (t.planned === null && status === "planned") t.planned = performance.now();
     }).observe(document, { subtree: true, childList: true, characterData: true });
   });
 }
 
-/** Since the file was chosen: wall time to "planned", and the long tasks (ms). */
+/** Since the file was chosen: wall time to "planning" (loaded) and to "planned", and the long tasks (ms). */
 export function pageTimeline(page) {
   return page.evaluate(() => {
     const t = window.__timeline;
     const tasks = t.longTasks.filter((e) => t.chosen !== null && e.start + e.duration > t.chosen);
     return {
+      chosenToLoadedMs: t.loaded !== null ? t.loaded - t.chosen : null,
       chosenToPlannedMs: t.planned !== null ? t.planned - t.chosen : null,
       longTaskSumMs: tasks.reduce((s, e) => s + e.duration, 0),
       longTaskMaxMs: tasks.reduce((m, e) => Math.max(m, e.duration), 0),
