@@ -1,7 +1,7 @@
 // Arrays ready for WebGL, built in the worker so the page's main thread only hands them to the
 // GPU: polylines with a colour per vertex, the slit domain's rings, the heat map, loop edges.
 
-import { heatColour, pathColour } from "./colors";
+import { heatColour, pathColour, type Rgb } from "./colors";
 import { simplify } from "./simplify";
 
 /** A polyline ready to draw as line segments. */
@@ -15,6 +15,15 @@ export interface Polyline {
   /** The path point each vertex stands for. */
   points: Uint32Array;
 }
+
+/** Colour scales sampled once (a colour per point of a long path allocated arrays by the million). */
+const LUT_SIZE = 1024;
+function table(colour: (t: number) => Rgb): Float32Array {
+  const lut = new Float32Array(3 * LUT_SIZE);
+  for (let i = 0; i < LUT_SIZE; i++) lut.set(colour(i / (LUT_SIZE - 1)), 3 * i);
+  return lut;
+}
+const PATH_LUT = table(pathColour);
 
 /**
  * The path points `kept` (indices into `points`, `dim` values each) as a polyline coloured along
@@ -33,7 +42,10 @@ export function polyline(points: Float64Array, dim: 2 | 3, kept: Uint32Array, to
   for (let k = 0; k < n; k++) {
     const i = kept[k]!;
     for (let c = 0; c < dim; c++) positions[3 * k + c] = points[dim * i + c]!;
-    colours.set(pathColour(total > 1 ? i / (total - 1) : 0), 3 * k);
+    const lut = 3 * Math.round((total > 1 ? i / (total - 1) : 0) * (LUT_SIZE - 1));
+    colours[3 * k] = PATH_LUT[lut]!;
+    colours[3 * k + 1] = PATH_LUT[lut + 1]!;
+    colours[3 * k + 2] = PATH_LUT[lut + 2]!;
     if (k > 0 && gaps[i] === gaps[kept[k - 1]! + 1]) {
       segments[s++] = k - 1;
       segments[s++] = k;
@@ -95,7 +107,19 @@ export function circles(radii: Float64Array, tolerance: number): Float32Array {
 /** rgb per vertex of the verifier's scallop heat map, scaled to the limit h. */
 export function heatColours(scallop: Float64Array, limit: number): Float32Array {
   const out = new Float32Array(scallop.length * 3);
-  for (let v = 0; v < scallop.length; v++) out.set(heatColour(scallop[v]!, limit), 3 * v);
+  // Within the limit the scale is sampled; beyond it (and uncovered) its own colours.
+  const lut = table((t) => heatColour(t * limit, limit));
+  for (let v = 0; v < scallop.length; v++) {
+    const s = scallop[v]!;
+    if (!(s >= 0 && s <= limit)) {
+      out.set(heatColour(s, limit), 3 * v);
+      continue;
+    }
+    const i = 3 * Math.round((s / limit) * (LUT_SIZE - 1));
+    out[3 * v] = lut[i]!;
+    out[3 * v + 1] = lut[i + 1]!;
+    out[3 * v + 2] = lut[i + 2]!;
+  }
   return out;
 }
 

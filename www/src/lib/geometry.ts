@@ -139,13 +139,16 @@ export function pathField(
 
 /** How far ahead of the last match a path point's move may lie (moves split to clear a facet). */
 const MATCH_LOOKAHEAD = 64;
+/** A centre this near (mm²) is the point's own move: clearing moves centres by microns. */
+const MATCH_CLOSE2 = 1e-4;
 
 /**
  * For each path point, its toolpath move: the one whose ball centre (tip + R·axis) is nearest the
  * point's designed centre (contact + R·normal), matched in order. Clearing the facets moves a
  * centre by far less than the spacing of the points and adds a few moves between them, so the
- * nearest of the next moves is the point's own. (Matching contacts to tips instead jumps between
- * rings where the surface slopes: a tip lies up to R·|n − z| from its contact.)
+ * nearest of the next moves is the point's own (and one within 0.01 mm ends the search).
+ * (Matching contacts to tips instead jumps between rings where the surface slopes: a tip lies up
+ * to R·|n − z| from its contact.)
  */
 export function matchMoves(
   contacts: Float64Array,
@@ -158,23 +161,21 @@ export function matchMoves(
   const moves = tips.length / 3;
   const out = new Uint32Array(points);
   if (moves === 0) return out;
-  const d2 = (i: number, m: number) => {
-    let d = 0;
-    for (let c = 0; c < 3; c++) {
-      const designed = contacts[3 * i + c]! + radius * normals[3 * i + c]!;
-      const centre = tips[3 * m + c]! + radius * axes[3 * m + c]!;
-      d += (designed - centre) ** 2;
-    }
-    return d;
-  };
   // The first point: any of the moves that can be lead-in (at most moves − points of them) or just after.
   let j = 0;
   let reach = Math.max(1, moves - points + MATCH_LOOKAHEAD);
   for (let i = 0; i < points; i++) {
-    let [best, bestD] = [j, d2(i, j)];
-    for (let m = j + 1; m < Math.min(moves, j + 1 + reach); m++) {
-      const d = d2(i, m);
+    const x = contacts[3 * i]! + radius * normals[3 * i]!;
+    const y = contacts[3 * i + 1]! + radius * normals[3 * i + 1]!;
+    const z = contacts[3 * i + 2]! + radius * normals[3 * i + 2]!;
+    let [best, bestD] = [j, Infinity];
+    for (let m = j; m < Math.min(moves, j + 1 + reach); m++) {
+      const dx = tips[3 * m]! + radius * axes[3 * m]! - x;
+      const dy = tips[3 * m + 1]! + radius * axes[3 * m + 1]! - y;
+      const dz = tips[3 * m + 2]! + radius * axes[3 * m + 2]! - z;
+      const d = dx * dx + dy * dy + dz * dz;
       if (d < bestD) [best, bestD] = [m, d];
+      if (d < MATCH_CLOSE2) break;
     }
     out[i] = j = best;
     reach = MATCH_LOOKAHEAD;

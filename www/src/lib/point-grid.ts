@@ -27,14 +27,20 @@ export function buildPointGrid(xy: Float64Array, perCell = 4): PointGrid {
   const [w, h] = [Math.max(maxX - minX, 1e-12), Math.max(maxY - minY, 1e-12)];
   const cell = Math.max(Math.sqrt((w * h * perCell) / count), Math.max(w, h) / 4096);
   const [nx, ny] = [Math.floor(w / cell) + 1, Math.floor(h / cell) + 1];
-  const cellOf = (i: number) => Math.floor((xy[2 * i + 1]! - minY) / cell) * nx + Math.floor((xy[2 * i]! - minX) / cell);
-  // Counting sort of the points by cell: two passes, no per-cell arrays.
+  // Counting sort of the points by cell: the cells once, then two passes, no per-cell arrays.
+  const n = xy.length / 2;
+  const cells = new Int32Array(n);
   const starts = new Uint32Array(nx * ny + 1);
-  for (let i = 0; i < xy.length / 2; i++) if (!Number.isNaN(xy[2 * i]!) && !Number.isNaN(xy[2 * i + 1]!)) starts[cellOf(i) + 1]!++;
+  for (let i = 0; i < n; i++) {
+    const [x, y] = [xy[2 * i]!, xy[2 * i + 1]!];
+    const c = Number.isNaN(x) || Number.isNaN(y) ? -1 : Math.floor((y - minY) / cell) * nx + Math.floor((x - minX) / cell);
+    cells[i] = c;
+    if (c >= 0) starts[c + 1]!++;
+  }
   for (let c = 1; c < starts.length; c++) starts[c]! += starts[c - 1]!;
   const fill = starts.slice(0, -1);
   const order = new Uint32Array(count);
-  for (let i = 0; i < xy.length / 2; i++) if (!Number.isNaN(xy[2 * i]!) && !Number.isNaN(xy[2 * i + 1]!)) order[fill[cellOf(i)]!++] = i;
+  for (let i = 0; i < n; i++) if (cells[i]! >= 0) order[fill[cells[i]!]!++] = i;
   return { minX, minY, cell, nx, ny, starts, order };
 }
 

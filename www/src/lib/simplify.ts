@@ -47,19 +47,21 @@ export function simplify(points: Float64Array, dim: 2 | 3, tolerance: number): U
   return kept;
 }
 
-/** Squared distance from point i to the segment from point a to point b. */
+/** Squared distance from point i to the segment from point a to point b (2D or 3D). */
 function segmentDistance2(p: Float64Array, dim: number, i: number, a: number, b: number): number {
-  let [ab2, t] = [0, 0];
-  for (let c = 0; c < dim; c++) {
-    const ab = p[dim * b + c]! - p[dim * a + c]!;
-    ab2 += ab * ab;
-    t += (p[dim * i + c]! - p[dim * a + c]!) * ab;
-  }
-  t = ab2 > 0 ? Math.min(1, Math.max(0, t / ab2)) : 0;
-  let d2 = 0;
-  for (let c = 0; c < dim; c++) {
-    const q = p[dim * a + c]! + t * (p[dim * b + c]! - p[dim * a + c]!);
-    d2 += (p[dim * i + c]! - q) ** 2;
-  }
-  return d2;
+  const ia = dim * a;
+  const ib = dim * b;
+  const ii = dim * i;
+  const abx = p[ib]! - p[ia]!;
+  const aby = p[ib + 1]! - p[ia + 1]!;
+  const abz = dim === 3 ? p[ib + 2]! - p[ia + 2]! : 0;
+  const aix = p[ii]! - p[ia]!;
+  const aiy = p[ii + 1]! - p[ia + 1]!;
+  const aiz = dim === 3 ? p[ii + 2]! - p[ia + 2]! : 0;
+  const ab2 = abx * abx + aby * aby + abz * abz;
+  const t = ab2 > 0 ? Math.min(1, Math.max(0, (aix * abx + aiy * aby + aiz * abz) / ab2)) : 0;
+  const dx = aix - t * abx;
+  const dy = aiy - t * aby;
+  const dz = aiz - t * abz;
+  return dx * dx + dy * dy + dz * dz;
 }
