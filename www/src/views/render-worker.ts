@@ -17,6 +17,8 @@ let cursor = { index: -1, askedAt: 0 };
 let at: CursorAt = {};
 /** The plan the views show (its request id). */
 let planId = 0;
+/** The plan of the last frame reported. */
+let reportedPlan = 0;
 
 function post(message: RenderResponse, transfer: Transferable[] = []): void {
   self.postMessage(message, { transfer });
@@ -39,6 +41,13 @@ function render(): void {
   if (at3d !== undefined) {
     const { "3d": _, ...rest } = at;
     at = at3d ? { ...rest, "3d": at3d } : rest;
+  }
+  // A frame with a new plan is reported once the GPU has drawn it (the page then says "planned"):
+  // reading a pixel back waits for it. Other frames are not waited for.
+  if (planId !== reportedPlan) {
+    views["3d"].pixels(0, 0, 1, 1);
+    views["2d"].pixels(0, 0, 1, 1);
+    reportedPlan = planId;
   }
   post({ type: "frame", frame, plan: planId, cursor: cursor.index, cursorAskedAt: cursor.askedAt, at });
 }
