@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Benchmarks, native and wasm (headless Chromium), on the same cases (src/bench.rs): the mesh stage
 # on a 1-million-triangle STL and the conformal core (flatten + slit map) on the analytic parts
-# (natively also on ../shared/meshes when present). Prints figures; asserts nothing about time.
+# (natively also on ../shared/meshes when present); then the page itself on generated parts of
+# 10k, 40k and 300k faces (scripts/bench-page.sh). Prints figures; asserts nothing about time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -14,3 +15,5 @@ echo "=== wasm (headless Chromium) ==="
 export WASM_BINDGEN_TEST_TIMEOUT=900
 wasm-pack test --headless --chrome --release -- --test wasm_bench -- --nocapture 2>&1 |
   grep -v -E '^\s*(Compiling|Finished|Running|Blocking)|^\[INFO\]'
+echo "=== the page (headless Chromium) ==="
+bash scripts/bench-page.sh

@@ -209,6 +209,10 @@ impl Plan {
     }
 }
 
+/// The steps of [`Planner::prepare`], in order.
+pub const PREPARE_STEPS: [&str; 4] =
+    ["refining the hole rims", "flattening", "factorising the slit map", "indexing the facets"];
+
 /// The stages reported to a progress callback, in order.
 pub const STAGES: [&str; 8] = ["origin", "optimise", "spacing", "spiral", "toolpath", "post", "verify", "done"];
 
@@ -242,9 +246,22 @@ impl Planner {
     /// part's vertices first), flattens it and factorises the slit map once; beside those, the
     /// crease-split surface and the facet tree.
     pub fn new(mesh: MeshOutput, now: &dyn Fn() -> f64) -> Result<Self, PlanError> {
+        Self::prepare(mesh, now, &mut |_, _, _| {})
+    }
+
+    /// [`Planner::new`], calling `progress(step, done, total)` as each of [`PREPARE_STEPS`]
+    /// starts. The facet index is built beside the conformal steps natively, after them on wasm
+    /// and on one thread (where its step is reported).
+    pub fn prepare(
+        mesh: MeshOutput,
+        now: &dyn Fn() -> f64,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Self, PlanError> {
+        let mut step = |i: usize| progress(PREPARE_STEPS[i], i, PREPARE_STEPS.len());
         let MeshOutput { report, surface } = mesh;
         surface.check_plannable()?;
         // The rim refinement prepares the surface for the flattening: its time counts there.
+        step(0);
         let t = now();
         let surface = planning_surface(&surface);
         // The facet tree and the crease-split surface depend on the part alone: built beside the
@@ -252,10 +269,13 @@ impl Planner {
         let ((creased, faces), prepared) = crate::par::beside(
             || (surface.with_crease_normals(CREASE_SPLIT_DEG), FaceTree::new(&surface.positions, &surface.triangles)),
             || -> Result<_, PlanError> {
+                step(1);
                 let flattening = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default())?;
                 let t_flatten = now() - t;
+                step(2);
                 let domain = PlanarDomain::of_surface(&surface, flattening.uv.clone());
                 let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default())?;
+                step(3);
                 Ok((flattening, domain, solver, t_flatten))
             },
         );

@@ -94,7 +94,7 @@ fn numbers(obj: &JsValue, key: &str) -> Vec<f64> {
 }
 
 fn load(stl: &[u8], options: JsValue) -> Result<Planner, String> {
-    Planner::new(stl, options).map_err(|e| {
+    Planner::new(stl, options, None).map_err(|e| {
         let value = JsValue::from(e);
         let error: js_sys::Error = value.dyn_into().expect("a JS Error");
         String::from(error.message())

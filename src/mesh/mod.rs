@@ -232,8 +232,23 @@ pub enum MeshError {
 
 /// Reads STL bytes and returns the report and the surface to plan (one-off entry of the stage).
 pub fn load(bytes: &[u8], options: &MeshOptions) -> Result<MeshOutput, MeshError> {
+    load_with_progress(bytes, options, &mut |_, _, _| {})
+}
+
+/// The steps of [`load_with_progress`], in order.
+pub const LOAD_STEPS: [&str; 2] = ["reading the STL", "checking the mesh"];
+
+/// [`load`], calling `progress(step, done, total)` as each of [`LOAD_STEPS`] starts (the page
+/// shows them: a big part takes a moment).
+pub fn load_with_progress(
+    bytes: &[u8],
+    options: &MeshOptions,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<MeshOutput, MeshError> {
     check_options(options)?;
+    progress(LOAD_STEPS[0], 0, LOAD_STEPS.len());
     let soup = stl::read(bytes, options.max_triangles)?;
+    progress(LOAD_STEPS[1], 1, LOAD_STEPS.len());
     from_triangles(&soup, options)
 }
 

@@ -216,6 +216,15 @@ fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())
 }
 
+/// The core's `progress(step, done, total)` as a call of the page's `onProgress` (when given).
+fn progress(on_progress: &Option<js_sys::Function>) -> impl FnMut(&str, usize, usize) + '_ {
+    move |stage, done, total| {
+        if let Some(f) = on_progress {
+            let _ = f.call3(&JsValue::NULL, &stage.into(), &(done as f64).into(), &(total as f64).into());
+        }
+    }
+}
+
 /// What the page shows of a slit map besides the per-vertex image.
 #[derive(Serialize)]
 #[serde(rename_all = "camelCase")]
@@ -231,13 +240,21 @@ struct SlitMapInfo<'a> {
 impl Planner {
     /// Reads an STL (binary or ASCII) and validates it. `options` is `undefined` or an object
     /// `{toolAxis?: [x, y, z], wallAngleDeg?: number, weldToleranceRel?: number,
-    /// maxTriangles?: number}`. Throws an `Error` naming the fault.
+    /// maxTriangles?: number}`. Throws an `Error` naming the fault. `onProgress(step, done,
+    /// total)` is called as each step starts (reading, checking).
     #[wasm_bindgen(constructor)]
-    pub fn new(stl: &[u8], options: JsValue) -> Result<Planner, JsError> {
+    pub fn new(stl: &[u8], options: JsValue, on_progress: Option<js_sys::Function>) -> Result<Planner, JsError> {
         init();
         let options = JsMeshOptions::parse(options)?;
-        let output = mesh::load(stl, &options).map_err(|e| JsError::new(&e.to_string()))?;
+        let output = mesh::load_with_progress(stl, &options, &mut progress(&on_progress)).map_err(js_err)?;
         Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
+    }
+
+    /// Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index;
+    /// otherwise the first call that needs it does), calling `onProgress(step, done, total)` as
+    /// each step starts. Throws for a surface that cannot be planned (closed, genus > 0).
+    pub fn prepare(&mut self, on_progress: Option<js_sys::Function>) -> Result<(), JsError> {
+        self.core_with(&mut progress(&on_progress)).map(|_| ())
     }
 
     /// The mesh report (the same object `slitpath info --json` prints).
@@ -257,6 +274,25 @@ impl Planner {
     /// Triangles of the surface to machine, flat vertex indices `[a0, b0, c0, a1, …]`.
     pub fn triangles(&self) -> Vec<u32> {
         self.mesh().1.triangles.iter().flatten().copied().collect()
+    }
+
+    /// Unit vertex normals (angle-weighted, towards the tool side), flat `[x0, y0, z0, …]`, for
+    /// shading.
+    pub fn normals(&self) -> Vec<f32> {
+        self.mesh().1.vertex_normals.iter().flat_map(|n| n.as_vec3().to_array()).collect()
+    }
+
+    /// The boundary loops' vertices, loop after loop (the outer loop first, then the holes in the
+    /// order `hole:N` counts them); [`Planner::loop_lengths`] splits them.
+    #[wasm_bindgen(js_name = loopVertices)]
+    pub fn loop_vertices(&self) -> Vec<u32> {
+        self.mesh().1.loops.iter().flatten().copied().collect()
+    }
+
+    /// The number of vertices of each boundary loop.
+    #[wasm_bindgen(js_name = loopLengths)]
+    pub fn loop_lengths(&self) -> Vec<u32> {
+        self.mesh().1.loops.iter().map(|l| l.len() as u32).collect()
     }
 
     /// Flattened positions (BFF, seed 000 §2.1), flat `[u0, v0, u1, …]`, same vertex order.
@@ -305,12 +341,7 @@ impl Planner {
     pub fn plan(&mut self, options: JsValue, on_progress: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let options = JsPlanOptions::parse(options)?;
         let core = self.core()?;
-        let mut progress = |stage: &str, done: usize, total: usize| {
-            if let Some(f) = &on_progress {
-                let _ = f.call3(&JsValue::NULL, &stage.into(), &(done as f64).into(), &(total as f64).into());
-            }
-        };
-        let plan = core.plan(&options, &mut progress, &now).map_err(js_err)?;
+        let plan = core.plan(&options, &mut progress(&on_progress), &now).map_err(js_err)?;
         let report = to_js(&plan.report);
         self.last_plan = Some(plan);
         report
@@ -338,6 +369,18 @@ impl Planner {
     #[wasm_bindgen(js_name = pathW)]
     pub fn path_w(&self) -> Result<Vec<f64>, JsError> {
         Ok(flat(self.last()?.spiral.points.iter().map(|p| p.w.to_array())))
+    }
+
+    /// Unit surface normal (towards the tool) of each spiral point, flat xyz.
+    #[wasm_bindgen(js_name = pathNormals)]
+    pub fn path_normals(&self) -> Result<Vec<f64>, JsError> {
+        Ok(flat(self.last()?.spiral.points.iter().map(|p| p.normal.to_array())))
+    }
+
+    /// Surface face (index into [`Planner::triangles`]) of each spiral point.
+    #[wasm_bindgen(js_name = pathFaces)]
+    pub fn path_faces(&self) -> Result<Vec<u32>, JsError> {
+        Ok(self.last()?.spiral.points.iter().map(|p| p.face).collect())
     }
 
     /// Tool tip of every move (lead-in, cut, lead-out, rapids), flat xyz.
@@ -396,9 +439,13 @@ impl Planner {
     }
 
     fn core(&mut self) -> Result<&Core, JsError> {
+        self.core_with(&mut |_, _, _| {})
+    }
+
+    fn core_with(&mut self, progress: &mut dyn FnMut(&str, usize, usize)) -> Result<&Core, JsError> {
         if self.core.is_none() {
             let output = self.output.as_ref().expect("the mesh is held until the core is built").clone();
-            self.core = Some(Core::new(output, &now).map_err(js_err)?);
+            self.core = Some(Core::prepare(output, &now, progress).map_err(js_err)?);
             self.output = None;
         }
         Ok(self.core.as_ref().expect("just built"))

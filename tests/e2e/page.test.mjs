@@ -5,7 +5,7 @@ import assert from "node:assert/strict";
 import { readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { after, before, describe, it } from "node:test";
-import { canvasStats, cli, launch, output, root, screenshotPath, serve } from "./harness.mjs";
+import { cli, launch, output, root, screenshotPath, serve, viewStats } from "./harness.mjs";
 
 const PLAN_TIMEOUT = 60_000;
 const SAMPLE = join(root, "www/public/samples/freeform_4_holes.stl");
@@ -64,7 +64,7 @@ describe("the planner page", { concurrency: false }, () => {
   it("renders the 3D and the 2D view (pixels read back)", async () => {
     await page.waitForTimeout(300); // one animation frame after the plan
     for (const id of ["view-3d", "view-2d"]) {
-      const s = await canvasStats(page, id);
+      const s = await viewStats(page, id);
       assert.ok(s.width > 100 && s.height > 100, `${id} has a size: ${JSON.stringify(s)}`);
       assert.ok(s.nonBackground > 0.05, `${id} is not blank: ${JSON.stringify(s)}`);
       assert.ok(s.colours > 30, `${id} shows more than a flat fill: ${JSON.stringify(s)}`);

@@ -49,6 +49,10 @@ export interface SurfaceMesh {
   positions: Float32Array;
   /** Three vertex indices per triangle. */
   triangles: Uint32Array;
+  /** Unit vertex normals, xyz per vertex. */
+  normals: Float32Array;
+  /** Boundary loops (vertex indices): the outer loop, then the holes in the order `hole:N` counts them. */
+  loops: Uint32Array[];
 }
 
 /** Where the spiral is centred: see the CLI's `--origin`. */
@@ -180,6 +184,10 @@ export interface PlanOutput {
   pathContacts: Float64Array;
   /** w (re, im) per path point. */
   pathW: Float64Array;
+  /** Surface face (index into the triangles) of each path point. */
+  pathFaces: Uint32Array;
+  /** Unit surface normal (towards the tool) per path point, xyz. */
+  pathNormals: Float64Array;
   /** xyz tool tip per toolpath move (incl. lead-in/out). */
   pathTips: Float64Array;
   /** Unit tool axis per toolpath move. */
@@ -194,6 +202,8 @@ export type ProgressCallback = (stage: string, done: number, total: number) => v
 interface PlanningMethods {
   plan(options: object, onProgress?: ProgressCallback): unknown;
   planW(): Float64Array;
+  pathFaces(): Uint32Array;
+  pathNormals(): Float64Array;
   ringRadii(): Float64Array;
   pathContacts(): Float64Array;
   pathW(): Float64Array;
@@ -205,11 +215,19 @@ interface PlanningMethods {
 }
 
 let ready: Promise<void> | undefined;
+let memory: WebAssembly.Memory | undefined;
 
 /** Instantiates the wasm module once; later calls share the same promise. */
 export function initCore(): Promise<void> {
-  ready ??= init().then(() => undefined);
+  ready ??= init().then((core) => {
+    memory = core.memory;
+  });
   return ready;
+}
+
+/** Size of the core's linear memory, bytes: it never shrinks, so this is its peak so far. */
+export function coreMemoryBytes(): number {
+  return memory?.buffer.byteLength ?? 0;
 }
 
 /** The core's version, e.g. "0.1.0" (after initCore()). */
@@ -222,9 +240,17 @@ export class Part {
   private constructor(private readonly planner: Planner) {}
 
   /** Reads and validates an STL; throws an Error whose message names the fault. */
-  static async open(stl: Uint8Array, options?: MeshOptions): Promise<Part> {
+  static async open(stl: Uint8Array, options?: MeshOptions, onProgress?: ProgressCallback): Promise<Part> {
     await initCore();
-    return new Part(new Planner(stl, options));
+    return new Part(new Planner(stl, options, onProgress));
+  }
+
+  /**
+   * Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index),
+   * reporting each step; throws for a surface that cannot be planned (closed, genus > 0).
+   */
+  prepare(onProgress?: ProgressCallback): void {
+    this.planner.prepare(onProgress);
   }
 
   report(): MeshReport {
@@ -232,7 +258,10 @@ export class Part {
   }
 
   surface(): SurfaceMesh {
-    return { positions: this.planner.positions(), triangles: this.planner.triangles() };
+    const vertices = this.planner.loopVertices();
+    let start = 0;
+    const loops = [...this.planner.loopLengths()].map((n) => vertices.slice(start, (start += n)));
+    return { positions: this.planner.positions(), triangles: this.planner.triangles(), normals: this.planner.normals(), loops };
   }
 
   /** Flattened uv per vertex; throws for a surface that cannot be planned. */
@@ -266,6 +295,8 @@ export class Part {
       ringRadii: p.ringRadii(),
       pathContacts: p.pathContacts(),
       pathW: p.pathW(),
+      pathFaces: p.pathFaces(),
+      pathNormals: p.pathNormals(),
       pathTips: p.pathTips(),
       pathAxes: p.pathAxes(),
       vertexScallop: p.vertexScallop(),

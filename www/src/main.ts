@@ -13,9 +13,8 @@ import { renderMetrics, renderNoPlan } from "./ui/metrics";
 import { OptionsForm } from "./ui/options-form";
 import { renderReport } from "./ui/report";
 import { readWithProgress, saveText } from "./ui/files";
-import { heatGradientCss } from "./views/colors";
-import { View2d } from "./views/view2d";
-import { View3d } from "./views/view3d";
+import { heatGradientCss } from "./lib/colors";
+import { Views } from "./views/views";
 
 const SAMPLE = "freeform_4_holes.stl";
 const SAMPLE_URL = `samples/${SAMPLE}`;
@@ -37,14 +36,17 @@ const layerPath = byId<HTMLInputElement>("layer-path");
 const layerNeedles = byId<HTMLInputElement>("layer-needles");
 
 const planner = new SlitpathPlanner();
-const view3d = new View3d(byId<HTMLCanvasElement>("view-3d"));
-const view2d = new View2d(byId<HTMLCanvasElement>("view-2d"));
+// Both views draw in a render worker: the main thread never waits for WebGL.
+const views = new Views({ "3d": byId<HTMLCanvasElement>("view-3d"), "2d": byId<HTMLCanvasElement>("view-2d") });
 let options: FullPlanOptions = initialOptions();
 const form = new OptionsForm(byId("options"), options);
 
-/** The part shown (its generation changes with every load) and the last good plan of it. */
+/**
+ * The part shown (its generation changes with every load) and the last good plan of it. Their
+ * big arrays went to the render worker: what stays here is the report, the G-code and counts.
+ */
 let part: { loaded: LoadedPart; generation: number } | null = null;
-let shown: { plan: PlanResult; options: FullPlanOptions } | null = null;
+let shown: { gcode: string; options: FullPlanOptions } | null = null;
 let generation = 0;
 let planning = false;
 let replanWanted = false;
@@ -83,15 +85,18 @@ async function loadStl(name: string, read: (onProgress: (fraction: number) => vo
   showProgress(`reading ${name}`, 0);
   try {
     const bytes = await read((fraction) => showProgress(`reading ${name}`, fraction));
-    showProgress(`checking and flattening ${name}`, null);
-    const loaded = await planner.load(bytes, { name });
+    showProgress(`checking ${name}`, null);
+    const loaded = await planner.load(
+      bytes,
+      { name },
+      { onProgress: (stage, done, total) => showProgress(`${stage} (${name})`, total > 0 ? done / total : null) },
+    );
     part = { loaded, generation: ++generation };
     shown = null;
     byId("part-name").textContent = `${name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces`;
     renderReport(byId("report"), loaded.report, name);
-    view3d.setPart(loaded);
-    view2d.setPart(loaded);
     form.setHoles(Math.max(0, loaded.loops.length - 1));
+    views.setPart(loaded);
     renderNoPlan(metricsBox, "Planning…");
     setOutputs();
     void plan();
@@ -119,7 +124,7 @@ async function plan(): Promise<void> {
     const result = await planner.plan(planned, {
       onProgress: (stage, done, total) => showProgress(`${stage} ${done}/${total}`, total > 0 ? done / total : null),
     });
-    if (part?.generation === mine.generation) show(result, planned);
+    if (part?.generation === mine.generation) await show(result, planned);
   } catch (error) {
     if (error instanceof CancelledError) setStatus("cancelled", `Planning was cancelled.${lastGood()}`);
     else setStatus(`error: ${message(error)}`, `Not planned.${lastGood()}`);
@@ -134,13 +139,13 @@ async function plan(): Promise<void> {
   }
 }
 
-function show(result: PlanResult, planned: FullPlanOptions): void {
-  shown = { plan: result, options: planned };
-  view3d.setPlan(result, planned.radiusMm, planned.scallopMm, planned.axes === 5);
-  view2d.setPlan(result);
-  view2d.setPicked(typeof planned.origin === "object" && !("z" in planned.origin) ? [planned.origin.x, planned.origin.y] : null);
+/** Shows a plan; the status reads "planned" once the views have drawn it. */
+async function show(result: PlanResult, planned: FullPlanOptions): Promise<void> {
+  shown = { gcode: result.gcode, options: planned };
   renderMetrics(metricsBox, result, planned.scallopMm);
   const points = result.pathContacts.length / 3;
+  const drawn = views.setPlan(result, planned.radiusMm, planned.axes === 5); // transfers the arrays it draws
+  views.setPicked(typeof planned.origin === "object" && !("z" in planned.origin) ? [planned.origin.x, planned.origin.y] : null);
   scrub.max = String(Math.max(0, points - 1));
   scrub.value = "0";
   scrub.disabled = points === 0;
@@ -150,6 +155,7 @@ function show(result: PlanResult, planned: FullPlanOptions): void {
   setOutputs();
   const { path } = result.report;
   const name = part?.loaded.name ?? "";
+  await drawn;
   setStatus("planned", `${name}: ${result.ringRadii.length} rings, ${path.length_mm.toFixed(0)} mm, ${path.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
@@ -162,8 +168,6 @@ function setOutputs(): void {
 function setCursor(index: number): void {
   const points = Number(scrub.max) + 1;
   scrubLabel.textContent = shown ? `point ${index + 1} of ${points}` : "";
-  view3d.setCursor(index);
-  view2d.setCursor(index);
 }
 
 function optionsChanged(next: FullPlanOptions, now = false): void {
@@ -187,11 +191,20 @@ form.onInvalid = (text) => setStatus(`error: ${text}`, `Not planned.${lastGood()
 optionsChanged(options, false);
 window.clearTimeout(replanTimer); // the first plan follows the first load
 
-view2d.onCursor = view3d.onCursor = (index) => {
+// A hover in a view has moved the cursor there already: follow it with the scrub bar.
+views.onCursor = (index) => {
   scrub.value = String(index);
   setCursor(index);
 };
-view2d.onPick = (x, y) => {
+views.onPick = (pane, x, y) => {
+  if (pane === "flat") return pick(x, y);
+  // Slit domain: back to the flattened plane through the image triangles (in the planner worker).
+  planner.flatPoint(x, y).then(
+    (uv) => uv && pick(...uv),
+    () => {},
+  );
+};
+function pick(x: number, y: number): void {
   const next = { ...options, origin: { x, y } };
   form.set(next);
   energyBox.textContent = "E_min at the picked pole: …";
@@ -202,23 +215,26 @@ view2d.onPick = (x, y) => {
     },
   );
   optionsChanged(next, true);
-};
-scrub.addEventListener("input", () => setCursor(Number(scrub.value)));
+}
+scrub.addEventListener("input", () => {
+  setCursor(Number(scrub.value));
+  views.setCursor(Number(scrub.value));
+});
 
-const layers = () => view3d.setLayers({ heatMap: layerHeat.checked, path: layerPath.checked, needles: layerNeedles.checked });
+const layers = () => views.setLayers({ heatMap: layerHeat.checked, path: layerPath.checked, needles: layerNeedles.checked });
 for (const box of [layerHeat, layerPath, layerNeedles]) box.addEventListener("change", layers);
 layerHeat.addEventListener("change", () => (legend.hidden = !layerHeat.checked || shown === null));
-byId("fit").addEventListener("click", () => view3d.fit());
+byId("fit").addEventListener("click", () => views.fit());
 byId("legend-bar").style.background = heatGradientCss();
 
 byId("cancel").addEventListener("click", () => planner.cancel());
 
 downloadGcode.addEventListener("click", () => {
-  if (shown) saveText(shown.plan.gcode, outputName(shown.options.post));
+  if (shown) saveText(shown.gcode, outputName(shown.options.post));
 });
 downloadCl.addEventListener("click", async () => {
   if (!shown) return;
-  if (shown.options.post === "cl") return saveText(shown.plan.gcode, outputName("cl"));
+  if (shown.options.post === "cl") return saveText(shown.gcode, outputName("cl"));
   showProgress("CL data", null);
   try {
     const cl = await planner.plan({ ...shown.options, post: "cl" });
@@ -284,3 +300,5 @@ document.addEventListener("drop", (event) => {
 
 // A first visit shows the product working: the bundled sample, planned.
 void loadStl(SAMPLE, fetchSample);
+// The e2e tests read the views' pixels back through this (the canvases belong to the render worker).
+(window as unknown as { slitpathViews: Views }).slitpathViews = views;

@@ -25,7 +25,7 @@ export interface LoadOptions {
 }
 
 export interface PlanCallbacks {
-  /** Called as the core finishes steps of each stage (read, flatten, slitmap, origin, …). */
+  /** Called as each step starts (loading: read, checks, flattening, factorisation, …; planning: origin, spacing, …). */
   onProgress?: (stage: string, done: number, total: number) => void;
 }
 
@@ -56,12 +56,15 @@ export class SlitpathPlanner {
     return this.versionPromise;
   }
 
-  /** Reads an STL (binary or ASCII). The bytes are copied (kept to reload after a cancel). */
-  load(stl: ArrayBuffer | Uint8Array, options: LoadOptions = {}): Promise<LoadedPart> {
+  /**
+   * Reads an STL (binary or ASCII), checks and flattens it and factorises its slit map, reporting
+   * each step. The bytes are copied (kept to reload after a cancel).
+   */
+  load(stl: ArrayBuffer | Uint8Array, options: LoadOptions = {}, callbacks: PlanCallbacks = {}): Promise<LoadedPart> {
     const bytes = stl instanceof Uint8Array ? stl.slice().buffer : stl.slice(0);
     const name = options.name ?? "part.stl";
     const kept = options.meshOptions ? { bytes, name, meshOptions: options.meshOptions } : { bytes, name };
-    const promise = this.sendLoad(kept);
+    const promise = this.sendLoad(kept, callbacks.onProgress);
     // Only a part that loaded is reloaded after a cancel.
     promise.then(() => (this.last = kept), () => {});
     return promise;
@@ -77,6 +80,11 @@ export class SlitpathPlanner {
     return this.request<number>({ type: "energy", id: this.nextId++, x, y });
   }
 
+  /** The flattened-plane point under a slit-domain point (x, y) of the last map (plan or preview), or null outside it. */
+  flatPoint(x: number, y: number): Promise<[number, number] | null> {
+    return this.request<[number, number] | null>({ type: "flatPoint", id: this.nextId++, x, y });
+  }
+
   /** Stops whatever runs: every pending request rejects with CancelledError; the last part is reloaded. */
   cancel(): void {
     this.restart(new CancelledError());
@@ -88,10 +96,10 @@ export class SlitpathPlanner {
     this.failAll(new CancelledError());
   }
 
-  private sendLoad(part: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions }): Promise<LoadedPart> {
+  private sendLoad(part: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions }, onProgress?: Pending["onProgress"]): Promise<LoadedPart> {
     const bytes = part.bytes.slice(0); // the copy is transferred, the original kept
     const base = { type: "load" as const, id: this.nextId++, name: part.name, bytes };
-    return this.request<LoadedPart>(part.meshOptions ? { ...base, meshOptions: part.meshOptions } : base, [bytes]);
+    return this.request<LoadedPart>(part.meshOptions ? { ...base, meshOptions: part.meshOptions } : base, [bytes], onProgress);
   }
 
   private request<T>(message: WorkerRequest, transfer: Transferable[] = [], onProgress?: Pending["onProgress"]): Promise<T> {
@@ -130,6 +138,8 @@ export class SlitpathPlanner {
         return this.settle(message.id, message.plan);
       case "energy":
         return this.settle(message.id, message.value);
+      case "flatPoint":
+        return this.settle(message.id, message.point);
       case "error": {
         if (message.id === null) {
           this.failAll(new Error(message.message));

@@ -1,35 +1,6 @@
-// Mesh helpers shared by the worker and the views: boundary loops, point location in a planar
-// image of the mesh (slit domain → flattened domain), and the path-point → toolpath-move match.
-
-/** Boundary loops as vertex index lists (edges used by one triangle, chained), longest first. */
-export function boundaryLoops(triangles: Uint32Array): Uint32Array[] {
-  const key = (a: number, b: number) => a * 0x100000000 + b;
-  const directed = new Set<number>();
-  for (let t = 0; t < triangles.length; t += 3) {
-    for (let k = 0; k < 3; k++) directed.add(key(triangles[t + k]!, triangles[t + ((k + 1) % 3)]!));
-  }
-  // A boundary edge a→b has no twin b→a; follow them head to tail.
-  const next = new Map<number, number>();
-  for (const e of directed) {
-    const a = Math.floor(e / 0x100000000);
-    const b = e - a * 0x100000000;
-    if (!directed.has(key(b, a))) next.set(a, b);
-  }
-  const loops: Uint32Array[] = [];
-  const seen = new Set<number>();
-  for (const start of [...next.keys()].sort((x, y) => x - y)) {
-    if (seen.has(start)) continue;
-    const loop: number[] = [];
-    let v: number | undefined = start;
-    while (v !== undefined && !seen.has(v)) {
-      seen.add(v);
-      loop.push(v);
-      v = next.get(v);
-    }
-    loops.push(Uint32Array.from(loop));
-  }
-  return loops.sort((a, b) => b.length - a.length);
-}
+// Mesh helpers of the worker: point location in a planar image of the mesh (slit domain →
+// flattened domain), path points carried to the flattened plane through their faces,
+// and the path-point → toolpath-move match.
 
 /** Point location in a planar image of the mesh (`xy` per vertex), by a uniform grid of triangles. */
 export class PlanarLocator {
@@ -126,35 +97,88 @@ export class PlanarLocator {
   }
 }
 
-/** Maps every point of `points` (xy pairs, in the image `xy`) to `field` (NaN where not located). */
-export function mapPoints(locator: PlanarLocator, points: Float64Array, field: Float64Array): Float64Array {
-  const out = new Float64Array(points.length);
-  for (let i = 0; i < points.length; i += 2) {
-    const p = locator.map(points[i]!, points[i + 1]!, field);
-    out[i] = p?.[0] ?? NaN;
-    out[i + 1] = p?.[1] ?? NaN;
+/**
+ * The per-vertex 2-vector `field` (e.g. uv) at each path point: `contacts` (xyz) lie on their
+ * faces `faces` of the surface (`positions`, `triangles`), so barycentric coordinates in the face
+ * carry them over. O(1) per point, no point location.
+ */
+export function pathField(
+  contacts: Float64Array,
+  faces: Uint32Array,
+  positions: Float32Array,
+  triangles: Uint32Array,
+  field: Float64Array,
+): Float64Array {
+  const out = new Float64Array((contacts.length / 3) * 2);
+  for (let i = 0; i < faces.length; i++) {
+    const f = 3 * faces[i]!;
+    const [a, b, c] = [triangles[f]!, triangles[f + 1]!, triangles[f + 2]!];
+    const [ax, ay, az] = [positions[3 * a]!, positions[3 * a + 1]!, positions[3 * a + 2]!];
+    // Barycentric coordinates of the contact projected onto the face's plane.
+    const [e1x, e1y, e1z] = [positions[3 * b]! - ax, positions[3 * b + 1]! - ay, positions[3 * b + 2]! - az];
+    const [e2x, e2y, e2z] = [positions[3 * c]! - ax, positions[3 * c + 1]! - ay, positions[3 * c + 2]! - az];
+    const [qx, qy, qz] = [contacts[3 * i]! - ax, contacts[3 * i + 1]! - ay, contacts[3 * i + 2]! - az];
+    const d11 = e1x * e1x + e1y * e1y + e1z * e1z;
+    const d12 = e1x * e2x + e1y * e2y + e1z * e2z;
+    const d22 = e2x * e2x + e2y * e2y + e2z * e2z;
+    const q1 = qx * e1x + qy * e1y + qz * e1z;
+    const q2 = qx * e2x + qy * e2y + qz * e2z;
+    const det = d11 * d22 - d12 * d12;
+    if (!(det > 0)) {
+      out[2 * i] = out[2 * i + 1] = NaN;
+      continue;
+    }
+    const l1 = (d22 * q1 - d12 * q2) / det;
+    const l2 = (d11 * q2 - d12 * q1) / det;
+    const l0 = 1 - l1 - l2;
+    out[2 * i] = l0 * field[2 * a]! + l1 * field[2 * b]! + l2 * field[2 * c]!;
+    out[2 * i + 1] = l0 * field[2 * a + 1]! + l1 * field[2 * b + 1]! + l2 * field[2 * c + 1]!;
   }
   return out;
 }
 
+/** How far ahead of the last match a path point's move may lie (moves split to clear a facet). */
+const MATCH_LOOKAHEAD = 64;
+/** A centre this near (mm²) is the point's own move: clearing moves centres by microns. */
+const MATCH_CLOSE2 = 1e-4;
+
 /**
- * For each path point (cutter contact), the toolpath move nearest to it, matched monotonically:
- * the moves follow the path in order (with lead-in/out moves before and after).
+ * For each path point, its toolpath move: the one whose ball centre (tip + R·axis) is nearest the
+ * point's designed centre (contact + R·normal), matched in order. Clearing the facets moves a
+ * centre by far less than the spacing of the points and adds a few moves between them, so the
+ * nearest of the next moves is the point's own (and one within 0.01 mm ends the search).
+ * (Matching contacts to tips instead jumps between rings where the surface slopes: a tip lies up
+ * to R·|n − z| from its contact.)
  */
-export function matchMoves(contacts: Float64Array, tips: Float64Array): Uint32Array {
+export function matchMoves(
+  contacts: Float64Array,
+  normals: Float64Array,
+  tips: Float64Array,
+  axes: Float64Array,
+  radius: number,
+): Uint32Array {
   const points = contacts.length / 3;
   const moves = tips.length / 3;
   const out = new Uint32Array(points);
   if (moves === 0) return out;
-  const d2 = (i: number, j: number) =>
-    (contacts[3 * i]! - tips[3 * j]!) ** 2 + (contacts[3 * i + 1]! - tips[3 * j + 1]!) ** 2 + (contacts[3 * i + 2]! - tips[3 * j + 2]!) ** 2;
+  // The first point: any of the moves that can be lead-in (at most moves − points of them) or just after.
   let j = 0;
-  // The first contact: the nearest of the moves that can be lead-in (at most moves − points of them).
-  const leadIn = Math.max(1, moves - points + 1);
-  for (let k = 1; k < Math.min(moves, leadIn); k++) if (d2(0, k) < d2(0, j)) j = k;
+  let reach = Math.max(1, moves - points + MATCH_LOOKAHEAD);
   for (let i = 0; i < points; i++) {
-    while (j + 1 < moves && d2(i, j + 1) <= d2(i, j)) j++;
-    out[i] = j;
+    const x = contacts[3 * i]! + radius * normals[3 * i]!;
+    const y = contacts[3 * i + 1]! + radius * normals[3 * i + 1]!;
+    const z = contacts[3 * i + 2]! + radius * normals[3 * i + 2]!;
+    let [best, bestD] = [j, Infinity];
+    for (let m = j; m < Math.min(moves, j + 1 + reach); m++) {
+      const dx = tips[3 * m]! + radius * axes[3 * m]! - x;
+      const dy = tips[3 * m + 1]! + radius * axes[3 * m + 1]! - y;
+      const dz = tips[3 * m + 2]! + radius * axes[3 * m + 2]! - z;
+      const d = dx * dx + dy * dy + dz * dz;
+      if (d < bestD) [best, bestD] = [m, d];
+      if (d < MATCH_CLOSE2) break;
+    }
+    out[i] = j = best;
+    reach = MATCH_LOOKAHEAD;
   }
   return out;
 }

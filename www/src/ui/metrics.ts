@@ -102,9 +102,12 @@ export function renderMetrics(container: HTMLElement, plan: PlanResult, limit: n
     .map(([stage, ms]) => `${stage} ${n0.format(ms)}`)
     .join(" · ");
   const total = plan.report.timings_ms["total"] ?? plan.ms;
+  const mib = plan.wasmMemoryBytes / 2 ** 20;
   container.replaceChildren(
     table,
     el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(total)}` }),
+    // Linear memory never shrinks: this is the planner's peak so far (big parts need watching).
+    el("p", { className: "timings", testId: "metric-memory", text: `Planner memory: ${n0.format(mib)} MiB` }),
   );
 }
 

@@ -1,18 +1,23 @@
-// The 3D view (three.js, WebGL): the part, optionally as the verifier's scallop heat map, the
-// spiral coloured along its length, the ball-end tool at the scrubbed path point, and tool-axis
-// needles for 5-axis plans. Orbit (left drag), pan (right drag), zoom (wheel), fit-to-part.
-// Renders on demand only (after a change or while the camera moves).
+// The 3D view (three.js, WebGL, in the render worker): the part, optionally as the verifier's
+// scallop heat map, the spiral coloured along its length, the ball-end tool at the scrubbed path
+// point, and tool-axis needles for 5-axis plans. Orbit (left drag), pan (right drag), zoom
+// (wheel), fit-to-part. Renders on demand only (after a change or while the camera moves).
+//
+// The planner worker prepares every array drawn (normals, heat colours, the path at two levels of
+// detail), so nothing here walks the mesh or the whole path: the path is drawn whole near the
+// part and decimated seen from afar, and the hover picks on the decimated one, then among the
+// few points it stands for. The part, path and needles are drawn into a layer with its depth
+// when they or the camera change; moving the tool draws that layer and the tool only.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
-import type { LoadedPart, PlanResult } from "../lib/index";
-import { SURFACE, heatColour, pathColour } from "./colors";
-
-export interface View3dLayers {
-  heatMap: boolean;
-  path: boolean;
-  needles: boolean;
-}
+import { SURFACE } from "../lib/colors";
+import { DepthLayer } from "./depth-layer";
+import { drawIn, type Rect } from "./dirty-rects";
+import type { ElementProxy } from "./element-proxy";
+import { dispose, polylineObject } from "./objects";
+import { readPixels } from "./read-pixels";
+import type { Layers, PartView, PlanView } from "./render-protocol";
 
 export class View3d {
   private readonly renderer: THREE.WebGLRenderer;
@@ -21,67 +26,82 @@ export class View3d {
   private readonly controls: OrbitControls;
   private readonly content = new THREE.Group();
   private surface: THREE.Mesh<THREE.BufferGeometry, THREE.MeshStandardMaterial> | null = null;
-  private path: THREE.Line | null = null;
+  /** The surface's colour attribute, and its plain colours (the heat map's are the plan's). */
+  private colours: THREE.BufferAttribute | null = null;
+  private plainColours: Float32Array | null = null;
+  private path: THREE.LOD | null = null;
+  /** The decimated path (also the far level of `path`): the hover picks on it. */
+  private pathCoarse: THREE.LineSegments | null = null;
   private needles: THREE.LineSegments | null = null;
   private readonly tool = new THREE.Group();
-  private plan: PlanResult | null = null;
-  /** Scallop limit h the heat map is scaled to, mm. */
-  private limit = 0.02;
-  /** Ball radius of the plan shown, mm. */
-  private radius = 3;
-  private layers: View3dLayers = { heatMap: true, path: true, needles: true };
-  private frame = 0;
+  /** The tool's own scene (drawn over the layer), with lights like the part's. */
+  private readonly toolScene = new THREE.Scene();
+  private readonly toolSun = new THREE.DirectionalLight(0xffffff, 1.6);
+  private readonly layer = new DepthLayer();
+  private layerStale = true;
+  /** Where the last frame drew the tool (null: nowhere); undefined: the next frame draws everything. */
+  private toolRect: Rect | null | undefined = undefined;
+  private plan: PlanView | null = null;
+  private cursor = -1;
+  /** Camera distance of the last fit: the full path is drawn nearer than half of it. */
+  private fitDistance = 1;
+  private layers: Layers = { heatMap: true, path: true, needles: true };
   private readonly raycaster = new THREE.Raycaster();
+  private stale = true;
 
   /** Hover over the path: the index of the path point under the pointer. */
   onCursor: (index: number) => void = () => {};
 
-  constructor(private readonly canvas: HTMLCanvasElement) {
-    // preserveDrawingBuffer: the tests (and screenshots) read the pixels back.
+  constructor(
+    canvas: OffscreenCanvas,
+    private readonly element: ElementProxy,
+    pixelRatio: number,
+    private readonly requestRender: () => void,
+  ) {
+    // preserveDrawingBuffer: the tests read the pixels back.
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-    this.renderer.setPixelRatio(Math.min(2, window.devicePixelRatio));
+    this.renderer.setPixelRatio(pixelRatio);
     this.renderer.setClearColor(0xf7f8fa);
     this.camera.up.set(0, 0, 1); // machine convention: Z is the tool axis
-    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls = new OrbitControls(this.camera, element as unknown as HTMLElement);
     this.controls.enableDamping = false;
-    this.controls.addEventListener("change", () => this.requestRender());
+    this.controls.addEventListener("change", () => this.invalidate(true));
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6));
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
-    sun.position.set(1, -2, 3);
+    sun.position.copy(SUN);
     this.camera.add(sun); // the light follows the camera: no dark side when orbiting
     this.scene.add(this.camera, this.content);
     this.tool.visible = false;
-    this.scene.add(this.tool);
-    canvas.addEventListener("pointermove", (event) => {
-      if (event.buttons === 0) this.hover(event);
+    this.toolScene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6), this.toolSun, this.tool);
+    element.addEventListener("pointermove", (event) => {
+      if ((event as PointerEvent).buttons === 0) this.hover(event as PointerEvent);
     });
-    new ResizeObserver(() => this.resize()).observe(canvas);
-    this.resize();
   }
 
-  /** The path point under the pointer (a pick within about one tool radius of the line). */
-  private hover(event: PointerEvent): void {
-    if (this.path === null || !this.path.visible || this.plan === null) return;
-    const rect = this.canvas.getBoundingClientRect();
-    const ndc = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
-    this.raycaster.setFromCamera(ndc, this.camera);
-    this.raycaster.params.Line = { threshold: this.radius };
-    const hit = this.raycaster.intersectObject(this.path)[0];
-    if (hit?.index === undefined) return;
-    this.setCursor(hit.index);
-    this.onCursor(hit.index);
+  resize(width: number, height: number): void {
+    this.element.clientWidth = width;
+    this.element.clientHeight = height;
+    this.renderer.setSize(width, height, false);
+    this.camera.aspect = width / height;
+    this.camera.updateProjectionMatrix();
+    const buffer = this.renderer.getDrawingBufferSize(new THREE.Vector2());
+    this.layer.resize(buffer.x, buffer.y);
+    this.invalidate(true);
   }
 
   /** Shows a newly loaded part (and forgets the previous plan). */
-  setPart(part: LoadedPart): void {
+  setPart(part: PartView): void {
     this.clear();
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(part.positions, 3));
     geometry.setIndex(new THREE.BufferAttribute(part.triangles, 1));
-    geometry.computeVertexNormals();
-    const colours = new Float32Array(part.positions.length);
-    for (let i = 0; i < colours.length; i += 3) colours.set(SURFACE, i);
-    geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+    geometry.setAttribute("normal", new THREE.BufferAttribute(part.normals, 3));
+    this.plainColours = new Float32Array(part.positions.length);
+    for (let i = 0; i < this.plainColours.length; i += 3) this.plainColours.set(SURFACE, i);
+    // One attribute for the part's life: the heat map is copied into it (a new attribute would
+    // leave the old GPU buffer behind until the geometry goes).
+    this.colours = new THREE.BufferAttribute(this.plainColours.slice(), 3);
+    geometry.setAttribute("color", this.colours);
     const material = new THREE.MeshStandardMaterial({
       vertexColors: true,
       side: THREE.DoubleSide,
@@ -94,28 +114,25 @@ export class View3d {
     this.surface = new THREE.Mesh(geometry, material);
     this.content.add(this.surface);
     this.fit();
+    this.invalidate(true);
   }
 
   /** Shows a plan of the current part: heat map, path, needles, tool. */
-  setPlan(plan: PlanResult, radiusMm: number, scallopMm: number, fiveAxis: boolean): void {
+  setPlan(plan: PlanView): void {
     this.plan = plan;
-    this.limit = scallopMm;
-    this.radius = radiusMm;
-    this.disposeObject(this.path);
-    this.disposeObject(this.needles);
-    this.path = this.needles = null;
-    this.path = this.makePath(plan.pathContacts);
+    dispose(this.path);
+    dispose(this.needles);
+    this.path = this.makePath(plan);
     this.content.add(this.path);
-    if (fiveAxis) {
-      this.needles = this.makeNeedles(plan.pathTips, plan.pathAxes, radiusMm);
-      this.content.add(this.needles);
-    }
-    this.makeTool(radiusMm);
+    this.needles = plan.fiveAxis ? this.makeNeedles(plan.pathTips, plan.pathAxes, plan.radiusMm) : null;
+    if (this.needles) this.content.add(this.needles);
+    this.makeTool(plan.radiusMm);
     this.applyLayers();
     this.setCursor(0);
+    this.invalidate(true);
   }
 
-  setLayers(layers: View3dLayers): void {
+  setLayers(layers: Layers): void {
     this.layers = layers;
     this.applyLayers();
   }
@@ -124,23 +141,24 @@ export class View3d {
   setCursor(index: number): void {
     const plan = this.plan;
     if (plan === null || plan.moveOfPoint.length === 0) return;
-    const i = Math.max(0, Math.min(plan.moveOfPoint.length - 1, index));
-    const m = plan.moveOfPoint[i]!;
+    this.cursor = Math.max(0, Math.min(plan.moveOfPoint.length - 1, index));
+    const m = plan.moveOfPoint[this.cursor]!;
     const tip = new THREE.Vector3(plan.pathTips[3 * m], plan.pathTips[3 * m + 1], plan.pathTips[3 * m + 2]);
     const axis = new THREE.Vector3(plan.pathAxes[3 * m], plan.pathAxes[3 * m + 1], plan.pathAxes[3 * m + 2]).normalize();
     // The tool's local +Y is its axis; its origin is the tip.
     this.tool.position.copy(tip);
     this.tool.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), axis);
     this.tool.visible = true;
-    this.requestRender();
+    this.invalidate();
   }
 
   /** Frames the whole part. */
   fit(): void {
-    const box = new THREE.Box3().setFromObject(this.content);
-    if (box.isEmpty()) return this.requestRender();
-    const sphere = box.getBoundingSphere(new THREE.Sphere());
-    const distance = sphere.radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 1.05;
+    const geometry = this.surface?.geometry;
+    if (geometry === undefined) return this.invalidate();
+    if (geometry.boundingBox === null) geometry.computeBoundingBox();
+    const sphere = geometry.boundingBox!.getBoundingSphere(new THREE.Sphere());
+    const distance = (sphere.radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2))) * 1.05;
     const direction = new THREE.Vector3(0.55, -1, 0.85).normalize();
     this.camera.position.copy(sphere.center).addScaledVector(direction, distance);
     this.camera.near = distance / 100;
@@ -148,27 +166,128 @@ export class View3d {
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(sphere.center);
     this.controls.update();
+    this.fitDistance = distance;
+    this.placeLevels();
+    this.invalidate(true);
+  }
+
+  /** Renders when something changed; the tool tip's place on screen (CSS pixels), if shown. */
+  render(): [number, number] | null | undefined {
+    if (!this.stale) return undefined;
+    this.stale = false;
+    const whole = this.layerStale || this.toolRect === undefined;
+    if (this.layerStale) {
+      this.layer.capture(this.renderer, this.scene, this.camera);
+      this.layerStale = false;
+    }
+    this.toolSun.position.copy(this.camera.localToWorld(SUN.clone()));
+    const draw = () => {
+      this.layer.draw(this.renderer);
+      this.renderer.autoClear = false;
+      this.renderer.render(this.toolScene, this.camera);
+      this.renderer.autoClear = true;
+    };
+    const rect = this.tool.visible ? this.toolOnScreen() : null;
+    const { clientWidth: w, clientHeight: h } = this.element;
+    if (whole) draw();
+    else drawIn(this.renderer, [this.toolRect, rect].filter((r): r is Rect => r != null), w, h, draw);
+    this.toolRect = rect;
+    if (!this.tool.visible) return null;
+    const p = this.tool.position.clone().project(this.camera);
+    return [((p.x + 1) / 2) * this.element.clientWidth, ((1 - p.y) / 2) * this.element.clientHeight];
+  }
+
+  /** The tool's box on screen (CSS pixels, a few pixels wider); the whole canvas when it reaches behind the camera. */
+  private toolOnScreen(): Rect {
+    const { clientWidth: w, clientHeight: h } = this.element;
+    const box = new THREE.Box3().setFromObject(this.tool);
+    this.camera.updateMatrixWorld();
+    let [x0, y0, x1, y1] = [Infinity, Infinity, -Infinity, -Infinity];
+    const p = new THREE.Vector3();
+    for (let k = 0; k < 8; k++) {
+      p.set(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y, k & 4 ? box.max.z : box.min.z).project(this.camera);
+      if (p.z < -1 || p.z > 1) return { x: 0, y: 0, w, h };
+      [x0, x1] = [Math.min(x0, ((p.x + 1) / 2) * w), Math.max(x1, ((p.x + 1) / 2) * w)];
+      [y0, y1] = [Math.min(y0, ((1 - p.y) / 2) * h), Math.max(y1, ((1 - p.y) / 2) * h)];
+    }
+    return { x: x0 - 3, y: y0 - 3, w: x1 - x0 + 6, h: y1 - y0 + 6 };
+  }
+
+  /** RGBA of a region of the last frame (CSS pixels, rows top first). */
+  pixels(x: number, y: number, width: number, height: number): { width: number; height: number; data: Uint8Array } {
+    return readPixels(this.renderer, x, y, width, height);
+  }
+
+  /** Something changed: the tool only, or (`layer`) what the layer holds. */
+  private invalidate(layer = false): void {
+    this.layerStale ||= layer;
+    if (layer) this.toolRect = undefined;
+    this.stale = true;
     this.requestRender();
   }
 
-  private paintHeat(scallop: Float64Array, limit: number): void {
-    const surface = this.surface;
-    if (surface === null) return;
-    const attribute = surface.geometry.getAttribute("color") as THREE.BufferAttribute;
-    const colours = attribute.array as Float32Array;
-    const heat = this.layers.heatMap && scallop.length * 3 === colours.length;
-    for (let v = 0; v < colours.length / 3; v++) colours.set(heat ? heatColour(scallop[v]!, limit) : SURFACE, 3 * v);
+  /**
+   * The path point under the pointer: a pick within about one tool radius of the decimated line,
+   * then the nearest to the ray of the path points that segment stands for.
+   */
+  private hover(event: PointerEvent): void {
+    const plan = this.plan;
+    if (this.path === null || this.pathCoarse === null || !this.path.visible || plan === null) return;
+    const { clientWidth: w, clientHeight: h } = this.element;
+    this.raycaster.setFromCamera(new THREE.Vector2((event.clientX / w) * 2 - 1, -(event.clientY / h) * 2 + 1), this.camera);
+    this.raycaster.params.Line = { threshold: plan.radiusMm };
+    const hit = this.raycaster.intersectObject(this.pathCoarse)[0];
+    if (hit?.index === undefined) return;
+    // The hit's index is the segment's place in the index buffer: its first vertex is there.
+    const { points: kept, segments } = plan.drawing.pathCoarse;
+    const v = segments[hit.index]!;
+    const [from, to] = [kept[Math.max(0, v - 1)]!, kept[Math.min(kept.length - 1, v + 2)]!];
+    const c = plan.pathContacts;
+    const point = new THREE.Vector3();
+    let [best, bestD] = [from, Infinity];
+    for (let i = from; i <= to; i++) {
+      const d = this.raycaster.ray.distanceSqToPoint(point.set(c[3 * i]!, c[3 * i + 1]!, c[3 * i + 2]!));
+      if (d < bestD) [best, bestD] = [i, d];
+    }
+    if (best === this.cursor) return;
+    this.setCursor(best);
+    this.onCursor(best);
+  }
+
+  /** The heat map's colours (or the plain ones) into the surface's colour attribute. */
+  private paintHeat(): void {
+    const attribute = this.colours;
+    if (attribute === null || this.plainColours === null) return;
+    const heat = this.plan?.drawing.heat;
+    const colours = this.layers.heatMap && heat && heat.length === attribute.array.length ? heat : this.plainColours;
+    (attribute.array as Float32Array).set(colours);
     attribute.needsUpdate = true;
   }
 
-  private makePath(contacts: Float64Array): THREE.Line {
-    const n = contacts.length / 3;
-    const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(contacts), 3));
-    const colours = new Float32Array(contacts.length);
-    for (let i = 0; i < n; i++) colours.set(pathColour(n > 1 ? i / (n - 1) : 0), 3 * i);
-    geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-    return new THREE.Line(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
+  /** The path at two levels of detail: whole near the part, decimated seen from afar. */
+  private makePath(plan: PlanView): THREE.LOD {
+    const lod = new THREE.LOD();
+    const full = polylineObject(plan.drawing.path);
+    this.pathCoarse = polylineObject(plan.drawing.pathCoarse);
+    for (const level of [full, this.pathCoarse]) level.frustumCulled = false;
+    lod.addLevel(full, 0);
+    lod.addLevel(this.pathCoarse, 1);
+    this.path = lod;
+    this.placeLevels();
+    return lod;
+  }
+
+  /**
+   * The LOD measures the camera's distance to its own position: put it at the part's centre (its
+   * levels shifted back) and switch to the whole path nearer than half the fitted distance.
+   */
+  private placeLevels(): void {
+    const lod = this.path;
+    const centre = this.surface?.geometry.boundingBox?.getCenter(new THREE.Vector3());
+    if (lod === null || centre === undefined) return;
+    lod.position.copy(centre);
+    for (const level of lod.levels) level.object.position.copy(centre).negate();
+    lod.levels[1]!.distance = 0.5 * this.fitDistance;
   }
 
   /** A needle along the tool axis from the tip at every k-th move (at most ~400 needles). */
@@ -187,7 +306,7 @@ export class View3d {
 
   /** Ball (centre one radius above the tip) and a shank, semi-transparent so the cut stays visible. */
   private makeTool(radius: number): void {
-    for (const child of [...this.tool.children]) this.disposeObject(child);
+    for (const child of [...this.tool.children]) dispose(child);
     const material = new THREE.MeshStandardMaterial({ color: 0xc9ced6, metalness: 0.6, roughness: 0.3, transparent: true, opacity: 0.8 });
     const ball = new THREE.Mesh(new THREE.SphereGeometry(radius, 24, 16), material);
     ball.position.set(0, radius, 0);
@@ -197,45 +316,21 @@ export class View3d {
   }
 
   private applyLayers(): void {
-    if (this.plan !== null) this.paintHeat(this.plan.vertexScallop, this.limit);
+    this.paintHeat();
     if (this.path) this.path.visible = this.layers.path;
     if (this.needles) this.needles.visible = this.layers.needles;
-    this.requestRender();
+    this.invalidate(true);
   }
 
   private clear(): void {
     this.plan = null;
+    this.cursor = -1;
     this.tool.visible = false;
-    for (const child of [...this.content.children]) this.disposeObject(child);
-    this.surface = this.path = this.needles = null;
-  }
-
-  private disposeObject(object: THREE.Object3D | null): void {
-    if (object === null) return;
-    object.removeFromParent();
-    object.traverse((node) => {
-      const mesh = node as Partial<THREE.Mesh>;
-      mesh.geometry?.dispose();
-      const material = mesh.material;
-      if (Array.isArray(material)) material.forEach((m) => m.dispose());
-      else material?.dispose();
-    });
-  }
-
-  private resize(): void {
-    const { clientWidth: w, clientHeight: h } = this.canvas;
-    if (w === 0 || h === 0) return;
-    this.renderer.setSize(w, h, false);
-    this.camera.aspect = w / h;
-    this.camera.updateProjectionMatrix();
-    this.requestRender();
-  }
-
-  private requestRender(): void {
-    if (this.frame !== 0) return;
-    this.frame = requestAnimationFrame(() => {
-      this.frame = 0;
-      this.renderer.render(this.scene, this.camera);
-    });
+    for (const child of [...this.content.children]) dispose(child);
+    this.surface = this.path = this.needles = this.pathCoarse = null;
+    this.colours = this.plainColours = null;
   }
 }
+
+/** The light that follows the camera, in the camera's frame. */
+const SUN = new THREE.Vector3(1, -2, 3);

@@ -1,4 +1,5 @@
-// Colour scales shared by the 3D and the 2D views (RGB components in 0..1).
+// Colour scales of the views (RGB components in 0..1): the worker colours the heat map and the
+// path with them, the page its legend.
 
 export type Rgb = [number, number, number];
 
