@@ -13,15 +13,20 @@
 //!   the seed's intent (tangential contact at both ends, a rigid tool), where the planar d would
 //!   leave the optimiser a rigidity error of the order of the curvature (seed 002 §7.2,
 //!   "Initialization").
-//! - Where the strips go. The first level lies just above the field's minimum; levels are added
-//!   while the next one exists on the surface, up to `strips`. Then the unused band at the top
-//!   is split: the first level moves up by half of it and the levels are found again, so the
-//!   strips sit in the middle of the surface (the bands left at both sides are narrower than a
-//!   strip and are reported by the verifier as not machined).
-//! - Base points. On g₀ they are spread evenly by arc length about `step_mm` apart, from end to
-//!   end (the seed spaces them by chord h; on a line or a circle the two agree, and even arc
-//!   spacing reaches both ends). Each next row is found through the normal planes of the
-//!   previous curve at its base points (Fig. 10): the crossing of the plane with g_{i+1}
+//! - Where the strips go. The levels are marched from a start level up and down while the next
+//!   one still exists on the surface (and the previous row's planes meet it); with a strip count
+//!   the consecutive strips whose end bands are most even are kept. The start is the middle
+//!   level of G or one a quarter, a half or three quarters of a strip beside it, whichever
+//!   gives the most strips. Then the start
+//!   moves by half the difference of the bands left at both ends and the levels are found
+//!   again, so the strips sit in the middle of the surface (the bands left at both sides are
+//!   narrower than a strip and are reported by the verifier as not machined). Marching from the
+//!   middle, not from one end, matters where G is not constant along the surface's edge: the
+//!   level just above its minimum is then a short arc round one corner.
+//! - Base points. On the middle curve they are spread evenly by arc length about `step_mm`
+//!   apart, from end to end (the seed spaces them on g₁ by chord h; on a line or a circle the
+//!   two agree, and even arc spacing reaches both ends). Each next row, up or down, is found
+//!   through the normal planes of the previous curve at its base points (Fig. 10): the crossing of the plane with g_{i+1}
 //!   nearest to g_{i,j}. Remark 1: where no plane meets g_{i+1} the row ends (the strip is
 //!   shorter), and where g_{i+1} reaches further than the previous row's planes by more than
 //!   half a step, base points are added along it, evenly by arc length (the strip is longer).
@@ -86,7 +91,7 @@ pub struct GuideInput<'a> {
 
 /// Levels are bracketed and refined to this fraction of the contact length d.
 const LEVEL_TOLERANCE: f64 = 1e-13;
-/// The first level sits this fraction of d above the field's minimum.
+/// The last level stays this fraction of d inside the field's range.
 const START_OFFSET: f64 = 1e-6;
 /// A normal plane must meet the next curve within this multiple of L.
 const REACH: f64 = 2.0;
@@ -94,53 +99,96 @@ const REACH: f64 = 2.0;
 /// The guiding curves and base points (module docs).
 pub fn guiding_curves(input: &GuideInput) -> Result<Guides, FlankError> {
     let d = input.family.contact_length_mm;
-    let first = march(input, input.field.min + START_OFFSET * d)?;
+    let across = input.field.max - input.field.min;
+    let no_strip = FlankError::NoStripFits { across_mm: across, strip_mm: d };
+    // The strip count depends on where the levels start: try the middle level and three
+    // others a quarter of a strip apart, keep the most strips (then the most even bands).
+    let middle = 0.5 * (input.field.min + input.field.max);
+    let mut first: Option<(f64, Guides)> = None;
+    for phase in [0.0, 0.5, 0.25, 0.75] {
+        let start = middle + (phase - 0.5 * f64::from(phase > 0.5)) * d;
+        let Some(g) = march(input, start)? else { continue };
+        let uneven = |g: &Guides| {
+            let n = g.levels.len() - 1;
+            ((g.levels[0] - input.field.min) - (input.field.max - g.levels[n])).abs()
+        };
+        let better = match &first {
+            None => true,
+            Some((_, f)) => {
+                g.levels.len() > f.levels.len() || (g.levels.len() == f.levels.len() && uneven(&g) < uneven(f))
+            }
+        };
+        if better {
+            first = Some((start, g));
+        }
+    }
+    let (middle, first) = first.ok_or(no_strip.clone())?;
     let strips = first.levels.len() - 1;
     if strips == 0 {
-        return Err(FlankError::NoStripFits {
-            across_mm: input.field.max - input.field.min,
-            strip_mm: d,
-        });
+        return Err(no_strip);
     }
     if let Some(wanted) = input.strips {
         if strips < wanted {
             return Err(FlankError::StripsDoNotFit { requested: wanted, fit: strips });
         }
     }
-    // Centre the strips: move the first level up by half the band left at the top.
-    let top = *first.levels.last().expect("two levels at least");
-    let (below, above) = (first.levels[0] - input.field.min, input.field.max - top);
-    if above - below > 2.0 * START_OFFSET * d {
-        let centred = march(input, first.levels[0] + 0.5 * (above - below))?;
-        if centred.levels.len() == first.levels.len() {
-            return Ok(centred);
+    // Centre the strips: move the start by half the difference of the bands left at both ends.
+    let (below, above) = (first.levels[0] - input.field.min, input.field.max - first.levels[strips]);
+    if (above - below).abs() > 1e-9 * d {
+        if let Some(centred) = march(input, middle + 0.5 * (above - below))? {
+            if centred.levels.len() == first.levels.len() {
+                return Ok(centred);
+            }
         }
     }
     Ok(first)
 }
 
-/// Marches levels up from `start` (at most `input.strips` strips).
-fn march(input: &GuideInput, start: f64) -> Result<Guides, FlankError> {
+/// Marches levels from `start` up and down while the surface goes on, then keeps the
+/// `input.strips` consecutive strips nearest the middle (all of them without a count). None
+/// when the level `start` does not exist.
+fn march(input: &GuideInput, start: f64) -> Result<Option<Guides>, FlankError> {
     let s = input.surface;
-    let first = level_set(s, &input.field.values, start, input.direction)
+    let Some(line) = level_set(s, &input.field.values, start, input.direction)
         .into_iter()
         .max_by(|a, b| a.length().total_cmp(&b.length()))
-        .ok_or(FlankError::NoStripFits { across_mm: input.field.max - input.field.min, strip_mm: 0.0 })?;
-    let row = first_row(s, &first, input.step_mm);
-    let mut guides = Guides { levels: vec![start], curves: vec![first.points.clone()], rows: vec![row] };
-    while input.strips.map_or(true, |m| guides.levels.len() <= m) {
-        let prev_level = *guides.levels.last().expect("one level");
-        let prev = guides.rows.last().expect("one row");
-        match next_level(input, prev_level, prev) {
-            Some((level, line, row)) => {
-                guides.levels.push(level);
-                guides.curves.push(line.points.clone());
-                guides.rows.push(row);
-            }
-            None => break,
-        }
+    else {
+        return Ok(None);
+    };
+    let row = first_row(s, &line, input.step_mm);
+    let mut up = vec![(start, line.points.clone(), row.clone())];
+    while let Some(next) = next_level(input, up.last().expect("one level").0, &up.last().expect("one row").2, Side::Up) {
+        up.push((next.0, next.1.points, next.2));
     }
-    Ok(guides)
+    let mut down = vec![(start, line.points, row)];
+    while let Some(next) =
+        next_level(input, down.last().expect("one level").0, &down.last().expect("one row").2, Side::Down)
+    {
+        down.push((next.0, next.1.points, next.2));
+    }
+    down.reverse();
+    down.pop(); // the start is in `up` too
+    let mut all = down;
+    all.extend(up);
+    // Keep `strips` consecutive strips, the window whose bands at both ends are most even.
+    let (lo, hi) = match input.strips {
+        Some(m) if m + 1 < all.len() => {
+            let bands = |k: usize| {
+                let (b, a) = (all[k].0 - input.field.min, input.field.max - all[k + m].0);
+                (a - b).abs()
+            };
+            let k = (0..all.len() - m).min_by(|&x, &y| bands(x).total_cmp(&bands(y))).expect("a window");
+            (k, k + m + 1)
+        }
+        _ => (0, all.len()),
+    };
+    let mut guides = Guides { levels: Vec::new(), curves: Vec::new(), rows: Vec::new() };
+    for (level, curve, row) in all.drain(lo..hi) {
+        guides.levels.push(level);
+        guides.curves.push(curve);
+        guides.rows.push(row);
+    }
+    Ok(Some(guides))
 }
 
 /// Base points evenly spread by arc length about `step` apart over the whole polyline.
@@ -273,17 +321,36 @@ fn propagate(s: &Surface, prev: &BaseRow, line: &Polyline, cross: &Crossings, st
 
 /// The mean initial axis length (eq. 7) between `prev` and the crossings, or None when fewer
 /// than two base points meet the line.
-fn mean_axis(s: &Surface, prev: &BaseRow, line: &Polyline, cross: &Crossings, f: &SphereFamily) -> Option<f64> {
+fn mean_axis(
+    s: &Surface,
+    prev: &BaseRow,
+    line: &Polyline,
+    cross: &Crossings,
+    f: &SphereFamily,
+    side: Side,
+) -> Option<f64> {
+    // The known row carries the tip spheres when marching up, the top spheres when marching down.
+    let (r_known, r_new) = match side {
+        Side::Up => (f.r1_mm, f.r2_mm),
+        Side::Down => (f.r2_mm, f.r1_mm),
+    };
     let (mut sum, mut n) = (0.0, 0usize);
     for (k, c) in cross.iter().enumerate() {
         if let Some((_, x, seg)) = c {
-            let a = prev.points[k] + f.r1_mm * prev.normals[k];
-            let b = *x + f.r2_mm * normal_in_face(s, line.faces[*seg], *x);
+            let a = prev.points[k] + r_known * prev.normals[k];
+            let b = *x + r_new * normal_in_face(s, line.faces[*seg], *x);
             sum += a.distance(b);
             n += 1;
         }
     }
     (n >= 2).then(|| sum / n as f64)
+}
+
+/// Which way [`next_level`] marches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Up,
+    Down,
 }
 
 /// The level set at `level` that the planes of `prev` meet most, with its crossings.
@@ -299,79 +366,81 @@ fn best_line(input: &GuideInput, level: f64, prev: &BaseRow) -> Option<(Polyline
         .filter(|(_, c)| c.iter().filter(|x| x.is_some()).count() >= 2)
 }
 
-/// The next level above `prev_level` whose initial axes are L long on average, with its curve
-/// and row; None when the surface ends first.
-fn next_level(input: &GuideInput, prev_level: f64, prev: &BaseRow) -> Option<(f64, Polyline, BaseRow)> {
+/// The next level beyond `prev_level` (above or below) whose initial axes are L long on average,
+/// with its curve and row; None when the surface ends first.
+fn next_level(input: &GuideInput, prev_level: f64, prev: &BaseRow, side: Side) -> Option<(f64, Polyline, BaseRow)> {
     let f = &input.family;
     let d = f.contact_length_mm;
-    let excess = |level: f64| -> Option<(f64, Polyline, Crossings)> {
-        let (line, cross) = best_line(input, level, prev)?;
-        let mean = mean_axis(input.surface, prev, &line, &cross, f)?;
+    let sign = if side == Side::Up { 1.0 } else { -1.0 };
+    // The excess as a function of the distance t ≥ 0 from the previous level.
+    let excess = |t: f64| -> Option<(f64, Polyline, Crossings)> {
+        let (line, cross) = best_line(input, prev_level + sign * t, prev)?;
+        let mean = mean_axis(input.surface, prev, &line, &cross, f, side)?;
         Some((mean - f.length_mm, line, cross))
     };
-    // Bracket: the excess is negative just above the previous level (axes of length ≈ |Δr|).
-    let (mut lo, mut f_lo) = (prev_level, -(f.length_mm - f.delta_r_mm.abs()));
+    let room = if side == Side::Up { input.field.max - prev_level } else { prev_level - input.field.min };
+    // Bracket: the excess is negative just beyond the previous level (axes of length ≈ |Δr|).
+    let (mut lo, mut f_lo) = (0.0, -(f.length_mm - f.delta_r_mm.abs()));
     let mut hi = None;
     for k in 1..=16 {
-        let level = prev_level + d * (0.5 + 0.25 * k as f64);
-        if level >= input.field.max {
-            let top = input.field.max - START_OFFSET * d;
-            match excess(top) {
-                Some((e, _, _)) if e >= 0.0 => hi = Some((top, e)),
+        let t = d * (0.5 + 0.25 * k as f64);
+        if t >= room {
+            let last = room - START_OFFSET * d;
+            match excess(last) {
+                Some((e, _, _)) if e >= 0.0 => hi = Some((last, e)),
                 _ => return None,
             }
             break;
         }
-        match excess(level) {
+        match excess(t) {
             Some((e, _, _)) if e >= 0.0 => {
-                hi = Some((level, e));
+                hi = Some((t, e));
                 break;
             }
-            Some((e, _, _)) => (lo, f_lo) = (level, e),
+            Some((e, _, _)) => (lo, f_lo) = (t, e),
             None => return None,
         }
     }
     let (mut hi, mut f_hi) = hi?;
     // Illinois (regula falsi with halving of the stale end's value).
-    let mut side = 0i8;
+    let mut stale = 0i8;
     let mut best = (hi, f_hi);
     for _ in 0..200 {
         if hi - lo <= LEVEL_TOLERANCE * d {
             break;
         }
-        let mut level = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-        if !(level > lo && level < hi) {
-            level = 0.5 * (lo + hi);
+        let mut t = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+        if !(t > lo && t < hi) {
+            t = 0.5 * (lo + hi);
         }
-        let Some((e, _, _)) = excess(level) else {
-            // The level set lost its crossings inside the bracket: shrink from above.
-            (hi, f_hi) = (level, f_hi);
+        let Some((e, _, _)) = excess(t) else {
+            // The level set lost its crossings inside the bracket: shrink from beyond.
+            hi = t;
             continue;
         };
         if e.abs() < best.1.abs() {
-            best = (level, e);
+            best = (t, e);
         }
         if e == 0.0 {
             break;
         }
         if e > 0.0 {
-            (hi, f_hi) = (level, e);
-            if side == 1 {
+            (hi, f_hi) = (t, e);
+            if stale == 1 {
                 f_lo *= 0.5;
             }
-            side = 1;
+            stale = 1;
         } else {
-            (lo, f_lo) = (level, e);
-            if side == -1 {
+            (lo, f_lo) = (t, e);
+            if stale == -1 {
                 f_hi *= 0.5;
             }
-            side = -1;
+            stale = -1;
         }
     }
-    let level = best.0;
-    let (_, line, cross) = excess(level)?;
+    let (_, line, cross) = excess(best.0)?;
     let row = propagate(input.surface, prev, &line, &cross, input.step_mm)?;
-    Some((level, line, row))
+    Some((prev_level + sign * best.0, line, row))
 }
 
 #[cfg(test)]

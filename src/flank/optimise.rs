@@ -88,10 +88,23 @@ pub struct OptimiseReport {
     pub rigid_projection_mm: f64,
 }
 
+/// The outer loop's proximal weight μ (a multiple of max(w₂, w₃)): where it starts, its floor
+/// and its ceiling (beyond, no step decreases F: converged as far as it goes).
+const MU_START: f64 = 0.1;
+const MU_MIN: f64 = 1e-9;
+const MU_MAX: f64 = 1e8;
+
+fn debug() -> bool {
+    cfg!(not(target_arch = "wasm32")) && std::env::var_os("FLANK_DEBUG").is_some()
+}
+
 /// Largest w₁ of the penalty continuation.
 const MAX_RIGID_WEIGHT: f64 = 1e8;
+/// The outer loop also stops after two accepted steps in a row that lower F by less than this
+/// fraction.
+const STALL: f64 = 1e-6;
 /// The outer loop stops when no grid point moves more than this fraction of L.
-const OUTER_TOLERANCE: f64 = 1e-9;
+const OUTER_TOLERANCE: f64 = 1e-8;
 
 /// Optimises `grid` on `surface` (module docs).
 pub fn optimise(
@@ -108,8 +121,8 @@ pub fn optimise(
         history: 8,
         max_iterations: o.inner_iterations,
         gtol: 0.0,
-        xtol: 1e-11 * l,
-        ftol: 1e-15,
+        xtol: 1e-9 * l,
+        ftol: 1e-12,
         first_step: 1e-3 * l,
     };
     let mut weights = o.weights;
@@ -129,31 +142,62 @@ pub fn optimise(
         max_move_mm: 0.0,
         rigid_projection_mm: 0.0,
     };
-    let mut first = true;
+    // The true objective at a grid: normals and footpoints refreshed there.
+    let refresh = |x: &[f64], previous: &[DVec3]| {
+        let normals = refresh_normals(surface, tree, x, previous);
+        let footpoints = footpoints(surface, tree, &grid, x, &normals, k);
+        (normals, footpoints)
+    };
+    let (mut normals, mut feet) = refresh(&x, &grid.normals);
+    {
+        let objective = Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights);
+        report.initial_terms = objective.evaluate(&x, None);
+        report.initial = figures(tree, &grid, &x, k, &objective);
+    }
+    let scale = weights.approx.max(weights.g1).max(1e-300);
+    let mut mu = MU_START * scale;
     loop {
+        let mut current = Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights).evaluate(&x, None).total;
+        let mut stalled = 0;
         for _ in 0..o.outer_iterations.max(1) {
-            grid.normals = refresh_normals(surface, tree, &x, &grid.normals);
-            let footpoints = footpoints(surface, tree, &grid, &x, &grid.normals, k);
-            let objective = Objective::new(&grid, grid.normals.clone(), footpoints, m_ini.clone(), weights);
-            if first {
-                report.initial_terms = objective.evaluate(&x, None);
-                report.initial = figures(tree, &grid, &x, k, &objective);
-                first = false;
-            }
-            let before = x.clone();
-            let r = super::lbfgs::minimise(&mut x, |x, g| objective.evaluate(x, Some(g)).total, &lbfgs);
+            let mut objective = Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights);
+            objective.prox = Some((mu, x.chunks(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect()));
+            let mut trial = x.clone();
+            let r = super::lbfgs::minimise(&mut trial, |x, g| objective.evaluate(x, Some(g)).total, &lbfgs);
             report.outer_iterations += 1;
             report.lbfgs_iterations += r.iterations;
             report.evaluations += r.evaluations;
-            if !x.iter().all(|v| v.is_finite()) {
+            if !trial.iter().all(|v| v.is_finite()) {
                 return Err(FlankError::Diverged { outer_iteration: report.outer_iterations });
             }
-            let moved = x.chunks(3).zip(before.chunks(3)).map(|(p, q)| dist3(p, q)).fold(0.0, f64::max);
-            if moved <= OUTER_TOLERANCE * l {
+            let (trial_normals, trial_feet) = refresh(&trial, &normals);
+            let value = Objective::new(&grid, trial_normals.clone(), trial_feet.clone(), m_ini.clone(), weights)
+                .evaluate(&trial, None)
+                .total;
+            if debug() {
+                eprintln!(
+                    "outer {} w1 {:e} mu {:.1e}: {:.6e} -> {:.6e} ({:?}, {} it)",
+                    report.outer_iterations, weights.rigid, mu, current, value, r.stop, r.iterations
+                );
+            }
+            if !(value <= current) {
+                // The linearised model was trusted too far: damp more and try again.
+                mu *= 10.0;
+                if mu > MU_MAX * scale {
+                    break;
+                }
+                continue;
+            }
+            let moved = trial.chunks(3).zip(x.chunks(3)).map(|(p, q)| dist3(p, q)).fold(0.0, f64::max);
+            let gain = current - value;
+            (x, normals, feet, current) = (trial, trial_normals, trial_feet, value);
+            mu = (mu * 0.3).max(MU_MIN * scale);
+            stalled = if gain <= STALL * current { stalled + 1 } else { 0 };
+            if moved <= OUTER_TOLERANCE * l || stalled >= 2 {
                 break;
             }
         }
-        let worst = worst_rigidity(&grid, &x);
+        let worst = worst_rigidity(&grid, &x, &normals);
         if worst.1 <= o.rigidity_tolerance_rel * l {
             break;
         }
@@ -169,9 +213,9 @@ pub fn optimise(
         weights.rigid *= 10.0;
         report.rigid_weight = weights.rigid;
     }
-    // The last solve's normals stay (the poses are read with them).
-    let footpoints = footpoints(surface, tree, &grid, &x, &grid.normals, k);
-    let objective = Objective::new(&grid, grid.normals.clone(), footpoints, m_ini.clone(), weights);
+    // The poses are read with the normals refreshed at the final grid.
+    grid.normals.clone_from(&normals);
+    let objective = Objective::new(&grid, normals, feet, m_ini.clone(), weights);
     report.final_terms = objective.evaluate(&x, None);
     report.final_figures = figures(tree, &grid, &x, k, &objective);
     grid.m = x.chunks(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
@@ -231,12 +275,12 @@ fn footpoints(
 }
 
 /// The pose with the largest rigidity error and that error, mm.
-fn worst_rigidity(grid: &Grid, x: &[f64]) -> (usize, f64) {
+fn worst_rigidity(grid: &Grid, x: &[f64], normals: &[DVec3]) -> (usize, f64) {
     let h = 0.5 * grid.family.delta_r_mm;
     let mut worst = (0, 0.0);
     for (i, p) in grid.poses.iter().enumerate() {
-        let a = super::objective::point(x, p.lower) - h * grid.normals[p.lower];
-        let b = super::objective::point(x, p.upper) + h * grid.normals[p.upper];
+        let a = super::objective::point(x, p.lower) - h * normals[p.lower];
+        let b = super::objective::point(x, p.upper) + h * normals[p.upper];
         let e = (a.distance(b) - grid.family.length_mm).abs();
         if e > worst.1 {
             worst = (i, e);

@@ -64,7 +64,8 @@ pub struct FlankVerifyOptions {
     /// Deviations are searched up to this, mm [None: L/2 of the tool's sphere family].
     pub search_mm: Option<f64>,
     /// Samples nearer than this to a boundary's envelope curve count for its sample figures, mm
-    /// [None: 1 % of the contact length d].
+    /// [None: twice the samples' spacing √(area/samples) for [`verify_flank`], and never less
+    /// than 1 % of the contact length d].
     pub seam_band_mm: Option<f64>,
     /// Within this |A| of the singular pose a C step over 90° is a flip, degrees [2].
     pub near_singular_deg: f64,
@@ -213,7 +214,10 @@ pub fn verify_flank(surface: &Surface, cl: &str, o: &FlankVerifyOptions) -> Resu
         Vec::new()
     };
     let tree = FaceTree::new(&surface.positions, &surface.triangles);
-    verify_samples(&samples, &vertices, &tree, cl, o)
+    // Both sides of a boundary need samples within the band: at least twice their spacing.
+    let spacing = (surface.area() / o.samples as f64).sqrt();
+    let o = FlankVerifyOptions { seam_band_mm: o.seam_band_mm.or(Some(2.0 * spacing)), ..o.clone() };
+    verify_samples(&samples, &vertices, &tree, cl, &o)
 }
 
 /// [`verify_flank`] on given samples (e.g. points of an analytic surface and their exact
@@ -309,7 +313,7 @@ pub fn verify_samples(
     for (k, devs) in per_strip.iter().enumerate() {
         v.strips.push(strip_figures(k, &program.strips[k], devs));
     }
-    let band = o.seam_band_mm.unwrap_or(0.01 * program.family.contact_length_mm);
+    let band = o.seam_band_mm.unwrap_or(0.01 * program.family.contact_length_mm).max(0.01 * program.family.contact_length_mm);
     v.seams = seams::seams(&program, tree, samples, &probes, band);
     Ok(v)
 }

@@ -32,6 +32,7 @@ pub struct SeamFigures {
     pub envelope_mean_kink_deg: f64,
     pub envelope_max_gap_mm: f64,
     pub envelope_mean_gap_mm: f64,
+    /// Machined samples within the band on either side.
     pub seam_samples: usize,
     pub sample_max_kink_deg: f64,
     pub sample_max_gap_mm: f64,
@@ -59,6 +60,28 @@ fn boundary(p: &Program, tree: &FaceTree, k: usize, s: f64) -> (Vec<(DVec3, DVec
         }
     }
     (out, not_real)
+}
+
+/// `v` rotated by the smallest rotation that takes the unit vector `from` to `to` (Rodrigues).
+fn transport(v: DVec3, from: DVec3, to: DVec3) -> DVec3 {
+    let axis = from.cross(to);
+    let (s, c) = (axis.length(), from.dot(to));
+    if s < 1e-15 {
+        return v;
+    }
+    let k = axis / s;
+    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
+}
+
+/// Distance from `x` to the polyline of `line`'s points.
+fn distance_to(line: &[(DVec3, DVec3)], x: DVec3) -> f64 {
+    line.windows(2)
+        .map(|w| {
+            let (a, d) = (w[0].0, w[1].0 - w[0].0);
+            let t = if d.length_squared() > 0.0 { ((x - a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            x.distance(a + t * d)
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The nearest point of the polyline to `x` strictly inside it: (distance, interpolated normal).
@@ -109,25 +132,28 @@ pub(super) fn seams(p: &Program, tree: &FaceTree, samples: &[SurfaceSample], pro
             f.envelope_mean_kink_deg = kinks / f.envelope_points as f64;
             f.envelope_mean_gap_mm = gaps / f.envelope_points as f64;
         }
+        // Machined samples beside the boundary, by the strip that finished them.
+        let mut sides: [Vec<(DVec3, DVec3, f64, DVec3)>; 2] = [Vec::new(), Vec::new()];
         for (s, probe) in samples.iter().zip(probes) {
-            let find = |strip: usize| probe.per_strip.iter().find(|(st, _)| *st == strip).map(|(_, a)| *a);
-            let (Some(lo), Some(hi)) = (find(k), find(k + 1)) else { continue };
-            let near = top.windows(2).any(|w| {
-                let (a, b) = (w[0].0, w[1].0);
-                let d = b - a;
-                let t = if d.length_squared() > 0.0 {
-                    ((s.position - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                s.position.distance(a + t * d) <= band
-            });
-            if !near {
-                continue;
+            let Some(m) = probe.machined_by.filter(|&m| m == k || m == k + 1) else { continue };
+            let Some(ap) = probe.per_strip.iter().find(|(st, _)| *st == m).map(|(_, a)| *a) else { continue };
+            if distance_to(&top, s.position) <= band {
+                sides[m - k].push((s.position, ap.normal, ap.distance, s.normal));
             }
-            f.seam_samples += 1;
-            f.sample_max_gap_mm = f.sample_max_gap_mm.max((lo.distance - hi.distance).abs());
-            f.sample_max_kink_deg = f.sample_max_kink_deg.max(swept::angle(lo.normal, hi.normal).to_degrees());
+        }
+        f.seam_samples = sides[0].len() + sides[1].len();
+        for &(x, n, d, nu) in &sides[0] {
+            let nearest = sides[1]
+                .iter()
+                .map(|&(y, m, e, mu)| (x.distance(y), m, e, mu))
+                .filter(|&(dist, _, _, _)| dist <= 2.0 * band)
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((_, m, e, mu)) = nearest {
+                // The surface turns between the two samples: compare the normals relative to it.
+                let m = transport(m, mu, nu);
+                f.sample_max_kink_deg = f.sample_max_kink_deg.max(swept::angle(n, m).to_degrees());
+                f.sample_max_gap_mm = f.sample_max_gap_mm.max((d - e).abs());
+            }
         }
         out.push(f);
     }
