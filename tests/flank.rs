@@ -1,6 +1,11 @@
 //! Integration tests of the flank strategy (seed 002, issue 35) on analytic surfaces: the whole
 //! plan (guiding curves → optimised poses → program) checked by the independent verifier, which
-//! reads the written CL data back.
+//! reads the written CL data back; bad input as typed errors; the A/C program through LinuxCNC's
+//! rs274.
+// Native only: runs rs274 (the browser tests are tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
+
+mod common;
 
 use glam::DVec3;
 use slitpath::fixtures;
@@ -235,4 +240,154 @@ fn blade_at_the_seed_figure_17_scale() {
     assert!(accurate < error && accurate_kink <= 1.14, "{accurate} {accurate_kink}");
     let (_, _, g1_kink) = run("blade, G1", Weights::g1());
     assert!(g1_kink < accurate_kink, "{g1_kink} vs {accurate_kink}");
+}
+
+fn small_plane() -> (Surface, FlankOptions) {
+    let s = surface(&fixtures::flank_plane(60.0, 50.0, 12, 10), DVec3::Z);
+    let o = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 1.0, top_radius_mm: 2.0, flute_length_mm: 12.0 },
+        pose_step_mm: Some(6.0),
+        post: Post::Cl,
+        decimals: 6,
+        verify_samples: 2000,
+        ..FlankOptions::default()
+    };
+    (s, o)
+}
+
+/// The verifier reads only the CL data: tips pushed 0.05 mm into the plane are a 0.05 mm gouge,
+/// pulled 0.05 mm away 0.05 mm of material left.
+#[test]
+fn verifier_measures_a_shifted_program() {
+    let (s, o) = small_plane();
+    let p = plan(&s, &o);
+    for shift in [-0.05, 0.05] {
+        let moved: String = p
+            .cl
+            .lines()
+            .map(|l| match l.strip_prefix("GOTO/") {
+                Some(rest) => {
+                    let mut v: Vec<f64> = rest.split(',').map(|x| x.parse().unwrap()).collect();
+                    v[2] += shift;
+                    format!("GOTO/{}\n", v.iter().map(|x| format!("{x:.8}")).collect::<Vec<_>>().join(","))
+                }
+                None => format!("{l}\n"),
+            })
+            .collect();
+        let v = slitpath::verify::flank::verify_flank(&s, &moved, &slitpath::verify::flank::FlankVerifyOptions::default())
+            .unwrap();
+        if shift < 0.0 {
+            assert!((v.max_gouge_mm - 0.05).abs() < 1e-6 && v.max_undercut_mm < 1e-6, "{v:?}");
+            assert!(v.gouges > 0 && v.coverage_within_tolerance < 0.1);
+        } else {
+            assert!((v.max_undercut_mm - 0.05).abs() < 1e-6 && v.max_gouge_mm < 1e-6, "{v:?}");
+        }
+        for strip in &v.strips {
+            assert!((strip.max_abs_mm - 0.05).abs() < 1e-6 && strip.samples > 0, "{strip:?}");
+            assert!((strip.mean_abs_mm - 0.05).abs() < 1e-6 && (strip.rms_mm - 0.05).abs() < 1e-6);
+        }
+    }
+    // Without the strips' header lines the verifier takes every run of feed moves as a strip.
+    let bare: String = p.cl.lines().filter(|l| !l.starts_with("$$ - strip ")).map(|l| format!("{l}\n")).collect();
+    let v = slitpath::verify::flank::verify_flank(&s, &bare, &slitpath::verify::flank::FlankVerifyOptions::default()).unwrap();
+    assert_eq!(v.strips_found, 4);
+    assert!(v.max_gouge_mm < 1e-5 && v.max_undercut_mm < 1e-5, "{v:?}");
+}
+
+/// Bad input is a typed error naming the fault, never a panic.
+#[test]
+fn bad_input_gives_typed_errors() {
+    let (s, o) = small_plane();
+    let err = |o: &FlankOptions| flank::plan(&s, o, &mut |_, _, _| {}, &|| 0.0).unwrap_err();
+    use flank::FlankError as E;
+    let nan_tool = FlankOptions { tool: ConeTool { tip_radius_mm: f64::NAN, ..o.tool }, ..o.clone() };
+    assert!(matches!(err(&nan_tool), E::InvalidTool { field: "tip_radius_mm", .. }));
+    let huge = FlankOptions { tool: ConeTool { flute_length_mm: 80.0, ..o.tool }, ..o.clone() };
+    let e = err(&huge);
+    assert!(matches!(e, E::NoStripFits { .. }), "{e}");
+    assert!(e.to_string().contains("tool larger than the part"));
+    assert!(matches!(err(&FlankOptions { strips: Some(9), ..o.clone() }), E::StripsDoNotFit { requested: 9, fit: 4 }));
+    assert!(matches!(err(&FlankOptions { direction: DVec3::new(f64::NAN, 0.0, 0.0), ..o.clone() }), E::InvalidDirection { .. }));
+    assert!(matches!(err(&FlankOptions { direction: DVec3::Z, ..o.clone() }), E::DirectionAlongNormals { .. }));
+    assert!(matches!(err(&FlankOptions { post: Post::LinuxCnc, ..o.clone() }), E::InvalidOption { field: "post", .. }));
+    assert!(matches!(err(&FlankOptions { pose_step_mm: Some(-1.0), ..o.clone() }), E::InvalidOption { field: "pose_step_mm", .. }));
+    assert!(matches!(err(&FlankOptions { samples_per_axis: 1, ..o.clone() }), E::InvalidOption { field: "samples_per_axis", .. }));
+    assert!(matches!(
+        err(&FlankOptions { weights: Weights { approx: f64::INFINITY, ..Weights::accuracy() }, ..o.clone() }),
+        E::InvalidOption { field: "weights.approx", .. }
+    ));
+    // Rigidity that cannot be met is refused, naming the pose.
+    let bent = surface(&fixtures::sphere_cap_patch(40.0, 25.0, 24), DVec3::Z);
+    let tight = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 1.0, top_radius_mm: 2.0, flute_length_mm: 12.0 },
+        rigidity_tolerance_rel: 1e-15,
+        outer_iterations: 2,
+        inner_iterations: 20,
+        ..o.clone()
+    };
+    let e = flank::plan(&bent, &tight, &mut |_, _, _| {}, &|| 0.0).unwrap_err();
+    assert!(matches!(e, E::RigidityNotMet { .. }), "{e}");
+}
+
+/// The holder is checked at every move: a wide holder on a bore hits the wall, and the flagged
+/// moves stay in the program.
+#[test]
+fn holder_collisions_are_flagged_not_dropped() {
+    let s = surface(&fixtures::cylinder_patch(25.0, 120.0, 40.0, 48, 16, false), -DVec3::X);
+    let base = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 1.5, top_radius_mm: 2.5, flute_length_mm: 12.0 },
+        direction: -DVec3::Y,
+        pose_step_mm: Some(4.0),
+        post: Post::Cl,
+        verify_samples: 0,
+        ..FlankOptions::default()
+    };
+    // A holder slimmer than the flute's top (radius 2.5 mm), tilted away from the wall with the
+    // tool, clears it by more than 0.5 mm.
+    let slim = plan(&s, &FlankOptions { holder_radius_mm: Some(2.0), collision_margin_mm: 0.2, ..base.clone() });
+    assert!(slim.report.collisions.flagged.is_empty(), "{:?}", slim.report.collisions.flagged.first());
+    let wide = plan(&s, &FlankOptions { holder_radius_mm: Some(30.0), ..base.clone() });
+    let c = &wide.report.collisions;
+    assert!(!c.flagged.is_empty() && c.min_clearance_mm.unwrap() < 0.0, "{c:?}");
+    assert!(c.flagged.iter().any(|f| f.strip.is_some() && f.what == "holder"));
+    assert_eq!(wide.toolpath.moves.len(), slim.toolpath.moves.len(), "nothing is dropped");
+}
+
+/// The A/C program with TCP runs through LinuxCNC's rs274 and reproduces every tip and angle;
+/// the CL data names the conical tool and the strips; two plans give the same bytes.
+#[test]
+fn ac_program_runs_in_rs274() {
+    let s = surface(&fixtures::cylinder_patch(40.0, 60.0, 40.0, 48, 16, true), DVec3::X);
+    let o = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 1.5, top_radius_mm: 2.5, flute_length_mm: 15.0 },
+        direction: DVec3::Y,
+        pose_step_mm: Some(5.0),
+        post: Post::Ac,
+        verify_samples: 500,
+        part_name: "cylinder wall".into(),
+        ..FlankOptions::default()
+    };
+    let p = plan(&s, &o);
+    assert_eq!(p.gcode, plan(&s, &o).gcode, "deterministic");
+    assert!(p.gcode.contains("(- tool: T1 conical flank cutter tip D3.0000 top D5.0000 flute L15.0000"));
+    assert!(p.gcode.contains("(- strip 1: moves "));
+    assert!(p.cl.contains("CUTTER/3.0000,0,1.5000,0,0,3.814075,15.0000"), "{}", &p.cl[..600]);
+    let run = common::rs274(&p.gcode, 1);
+    let angles = slitpath::gcode::ac::ac_angles(&p.toolpath.moves.iter().map(|m| m.axis).collect::<Vec<_>>()).unwrap();
+    // Every move reaches rs274 in order, tip and angles (after its first motion, the safe
+    // height at the unknown start; moves equal at 4 decimals are skipped by the post).
+    let mut k = 1;
+    let mut reproduced = 0;
+    for (m, &(a, c)) in p.toolpath.moves.iter().zip(&angles) {
+        while k < run.motions.len() && run.motions[k].xyz.distance(m.tip) > 1e-3 {
+            k += 1;
+        }
+        assert!(k < run.motions.len(), "move {m:?} is not in rs274's motions");
+        assert!((run.motions[k].abc.x - a).abs() < 1e-3 && (run.motions[k].abc.z - c).abs() < 1e-3);
+        reproduced += 1;
+    }
+    assert_eq!(reproduced, p.toolpath.moves.len());
+    assert!(run.motions.len() <= p.toolpath.moves.len() + 1);
+    let v = p.report.verify.as_ref().unwrap();
+    assert!(v.kinematics.a_out_of_range.is_none() && v.kinematics.c_flips == 0 && v.kinematics.max_c_step_deg < 5.0, "{:?}", v.kinematics);
 }

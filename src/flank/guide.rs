@@ -16,8 +16,8 @@
 //! - Where the strips go. The levels are marched from a start level up and down while the next
 //!   one still exists on the surface (and the previous row's planes meet it); with a strip count
 //!   the consecutive strips whose end bands are most even are kept. The start is the middle
-//!   level of G or one a quarter, a half or three quarters of a strip beside it, whichever
-//!   gives the most strips. Then the start
+//!   level of G or one a quarter or half a strip above it or a quarter below, whichever gives
+//!   the most strips. Then the start
 //!   moves by half the difference of the bands left at both ends and the levels are found
 //!   again, so the strips sit in the middle of the surface (the bands left at both sides are
 //!   narrower than a strip and are reported by the verifier as not machined). Marching from the
@@ -105,8 +105,8 @@ pub fn guiding_curves(input: &GuideInput) -> Result<Guides, FlankError> {
     // others a quarter of a strip apart, keep the most strips (then the most even bands).
     let middle = 0.5 * (input.field.min + input.field.max);
     let mut first: Option<(f64, Guides)> = None;
-    for phase in [0.0, 0.5, 0.25, 0.75] {
-        let start = middle + (phase - 0.5 * f64::from(phase > 0.5)) * d;
+    for phase in [0.0, 0.5, 0.25, -0.25] {
+        let start = middle + phase * d;
         let Some(g) = march(input, start)? else { continue };
         let uneven = |g: &Guides| {
             let n = g.levels.len() - 1;
@@ -216,6 +216,9 @@ fn normal_in_face(s: &Surface, f: u32, p: DVec3) -> DVec3 {
 type Crossings = Vec<Option<(f64, DVec3, usize)>>;
 
 fn crossings(prev: &BaseRow, line: &Polyline, reach: f64) -> Crossings {
+    // Rows end on the surface's edge, and so do the level sets: a plane through an end point
+    // must not miss the next curve's end by a rounding error.
+    let eps = 1e-9 * reach;
     prev.points
         .iter()
         .zip(&prev.tangents)
@@ -224,10 +227,10 @@ fn crossings(prev: &BaseRow, line: &Polyline, reach: f64) -> Crossings {
             for k in 0..line.points.len() - 1 {
                 let (p, q) = (line.points[k], line.points[k + 1]);
                 let (sp, sq) = ((p - g).dot(t), (q - g).dot(t));
-                if (sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0) || sp == sq {
+                if (sp > eps && sq > eps) || (sp < -eps && sq < -eps) {
                     continue;
                 }
-                let u = sp / (sp - sq);
+                let u = if sp != sq { (sp / (sp - sq)).clamp(0.0, 1.0) } else { 0.0 };
                 let x = p + u * (q - p);
                 let dist = x.distance(g);
                 if dist <= reach && best.map_or(true, |b| dist < b.3) {
