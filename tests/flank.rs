@@ -391,3 +391,61 @@ fn ac_program_runs_in_rs274() {
     let v = p.report.verify.as_ref().unwrap();
     assert!(v.kinematics.a_out_of_range.is_none() && v.kinematics.c_flips == 0 && v.kinematics.max_c_step_deg < 5.0, "{:?}", v.kinematics);
 }
+
+/// `slitpath flank` writes the program and the report; bad options are one line on stderr and
+/// exit code 1.
+#[test]
+fn cli_plans_and_reports() {
+    let dir = std::env::temp_dir().join(format!("slitpath-flank-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = dir.join("plane.stl");
+    let (out, report) = (dir.join("plane.cl"), dir.join("plane.json"));
+    let exe = env!("CARGO_BIN_EXE_slitpath");
+    let fixture = std::process::Command::new(exe)
+        .args(["fixture", "flank_plane", "-o", part.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(fixture.status.success());
+    // The options, each replaced by `extra`'s value of the same flag.
+    let run = |extra: &[&str]| {
+        let mut flags: Vec<(&str, &str)> = vec![
+            ("--tip-radius", "1.5"),
+            ("--top-radius", "2.5"),
+            ("--flute-length", "20"),
+            ("--direction", "1,0,0"),
+            ("--step", "10"),
+            ("--verify-samples", "1000"),
+            ("-o", out.to_str().unwrap()),
+            ("--report", report.to_str().unwrap()),
+        ];
+        for pair in extra.chunks(2) {
+            match flags.iter_mut().find(|(f, _)| *f == pair[0]) {
+                Some(slot) => slot.1 = pair[1],
+                None => flags.push((pair[0], pair[1])),
+            }
+        }
+        let mut args = vec!["flank", part.to_str().unwrap()];
+        flags.iter().for_each(|(f, v)| args.extend([*f, *v]));
+        std::process::Command::new(exe).args(&args).output().unwrap()
+    };
+    let ok = run(&["--post", "cl", "--weights", "g1", "--strips", "3"]);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let cl = std::fs::read_to_string(&out).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(json["guide"]["strips"], 3);
+    assert_eq!(json["options"]["weights"]["approx"], 1e-4);
+    assert!(json["verify"]["max_gouge_mm"].as_f64().unwrap() < 1e-3);
+    assert!(slitpath::gcode::parse_cl(&cl).is_ok() && cl.contains("$$ - strip 3: moves "));
+    for (extra, fault) in [
+        (&["--tip-radius", "NaN"][..], "tip_radius_mm"),
+        (&["--post", "linuxcnc"][..], "--post"),
+        (&["--weights", "heavy"][..], "--weights"),
+        (&["--flute-length", "500"][..], "no strip fits"),
+    ] {
+        let bad = run(extra);
+        let stderr = String::from_utf8_lossy(&bad.stderr);
+        assert_eq!(bad.status.code(), Some(1), "{extra:?}: {stderr}");
+        assert!(stderr.contains(fault) && stderr.lines().count() == 1, "{extra:?}: {stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
