@@ -6,6 +6,8 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod common;
+#[path = "digest/flank.rs"]
+mod flank_digest;
 
 use glam::DVec3;
 use slitpath::fixtures;
@@ -195,7 +197,9 @@ fn sphere_cap_g1_term_trades_error_for_kink() {
     summary("sphere, w3 = 1", &with);
     let without = plan(&s, &sphere_options(tool, 3, Weights { g1: 0.0, ..Weights::accuracy() }));
     summary("sphere, w3 = 0", &without);
-    let kink = |p: &FlankPlan| p.report.verify.as_ref().unwrap().seams.iter().map(|s| s.envelope_max_kink_deg).fold(0.0, f64::max);
+    let kink = |p: &FlankPlan| {
+        p.report.verify.as_ref().unwrap().seams.iter().map(|s| s.envelope_max_kink_deg).fold(0.0, f64::max)
+    };
     let (e1, e0) = (max_error(&with), max_error(&without));
     let (k1, k0) = (kink(&with), kink(&without));
     eprintln!("w3 = 1: error {e1:.5} kink {k1:.4}°; w3 = 0: error {e0:.5} kink {k0:.4}°");
@@ -233,7 +237,8 @@ fn blade_at_the_seed_figure_17_scale() {
         assert!(p.report.optimise.final_figures.max_rigidity_error_mm <= 1e-4 * l);
         (max_error(&p), v.max_gouge_mm.max(v.max_undercut_mm), kink)
     };
-    let (error, verified, kink) = run("blade, seed's Fig. 17 weights", Weights { approx: 0.005, g1: 1.0, ..Weights::accuracy() });
+    let (error, verified, kink) =
+        run("blade, seed's Fig. 17 weights", Weights { approx: 0.005, g1: 1.0, ..Weights::accuracy() });
     assert!(error <= 2.64 && verified <= 2.64, "{error} {verified}");
     assert!(kink <= 1.14, "{kink}°");
     let (accurate, _, accurate_kink) = run("blade, accuracy", Weights::accuracy());
@@ -262,20 +267,20 @@ fn verifier_measures_a_shifted_program() {
     let (s, o) = small_plane();
     let p = plan(&s, &o);
     for shift in [-0.05, 0.05] {
-        let moved: String = p
-            .cl
-            .lines()
-            .map(|l| match l.strip_prefix("GOTO/") {
-                Some(rest) => {
-                    let mut v: Vec<f64> = rest.split(',').map(|x| x.parse().unwrap()).collect();
-                    v[2] += shift;
-                    format!("GOTO/{}\n", v.iter().map(|x| format!("{x:.8}")).collect::<Vec<_>>().join(","))
-                }
-                None => format!("{l}\n"),
-            })
-            .collect();
-        let v = slitpath::verify::flank::verify_flank(&s, &moved, &slitpath::verify::flank::FlankVerifyOptions::default())
-            .unwrap();
+        let moved: String =
+            p.cl.lines()
+                .map(|l| match l.strip_prefix("GOTO/") {
+                    Some(rest) => {
+                        let mut v: Vec<f64> = rest.split(',').map(|x| x.parse().unwrap()).collect();
+                        v[2] += shift;
+                        format!("GOTO/{}\n", v.iter().map(|x| format!("{x:.8}")).collect::<Vec<_>>().join(","))
+                    }
+                    None => format!("{l}\n"),
+                })
+                .collect();
+        let v =
+            slitpath::verify::flank::verify_flank(&s, &moved, &slitpath::verify::flank::FlankVerifyOptions::default())
+                .unwrap();
         if shift < 0.0 {
             assert!((v.max_gouge_mm - 0.05).abs() < 1e-6 && v.max_undercut_mm < 1e-6, "{v:?}");
             assert!(v.gouges > 0 && v.coverage_within_tolerance < 0.1);
@@ -289,7 +294,8 @@ fn verifier_measures_a_shifted_program() {
     }
     // Without the strips' header lines the verifier takes every run of feed moves as a strip.
     let bare: String = p.cl.lines().filter(|l| !l.starts_with("$$ - strip ")).map(|l| format!("{l}\n")).collect();
-    let v = slitpath::verify::flank::verify_flank(&s, &bare, &slitpath::verify::flank::FlankVerifyOptions::default()).unwrap();
+    let v = slitpath::verify::flank::verify_flank(&s, &bare, &slitpath::verify::flank::FlankVerifyOptions::default())
+        .unwrap();
     assert_eq!(v.strips_found, 4);
     assert!(v.max_gouge_mm < 1e-5 && v.max_undercut_mm < 1e-5, "{v:?}");
 }
@@ -307,11 +313,20 @@ fn bad_input_gives_typed_errors() {
     assert!(matches!(e, E::NoStripFits { .. }), "{e}");
     assert!(e.to_string().contains("tool larger than the part"));
     assert!(matches!(err(&FlankOptions { strips: Some(9), ..o.clone() }), E::StripsDoNotFit { requested: 9, fit: 4 }));
-    assert!(matches!(err(&FlankOptions { direction: DVec3::new(f64::NAN, 0.0, 0.0), ..o.clone() }), E::InvalidDirection { .. }));
+    assert!(matches!(
+        err(&FlankOptions { direction: DVec3::new(f64::NAN, 0.0, 0.0), ..o.clone() }),
+        E::InvalidDirection { .. }
+    ));
     assert!(matches!(err(&FlankOptions { direction: DVec3::Z, ..o.clone() }), E::DirectionAlongNormals { .. }));
     assert!(matches!(err(&FlankOptions { post: Post::LinuxCnc, ..o.clone() }), E::InvalidOption { field: "post", .. }));
-    assert!(matches!(err(&FlankOptions { pose_step_mm: Some(-1.0), ..o.clone() }), E::InvalidOption { field: "pose_step_mm", .. }));
-    assert!(matches!(err(&FlankOptions { samples_per_axis: 1, ..o.clone() }), E::InvalidOption { field: "samples_per_axis", .. }));
+    assert!(matches!(
+        err(&FlankOptions { pose_step_mm: Some(-1.0), ..o.clone() }),
+        E::InvalidOption { field: "pose_step_mm", .. }
+    ));
+    assert!(matches!(
+        err(&FlankOptions { samples_per_axis: 1, ..o.clone() }),
+        E::InvalidOption { field: "samples_per_axis", .. }
+    ));
     assert!(matches!(
         err(&FlankOptions { weights: Weights { approx: f64::INFINITY, ..Weights::accuracy() }, ..o.clone() }),
         E::InvalidOption { field: "weights.approx", .. }
@@ -389,7 +404,11 @@ fn ac_program_runs_in_rs274() {
     assert_eq!(reproduced, p.toolpath.moves.len());
     assert!(run.motions.len() <= p.toolpath.moves.len() + 1);
     let v = p.report.verify.as_ref().unwrap();
-    assert!(v.kinematics.a_out_of_range.is_none() && v.kinematics.c_flips == 0 && v.kinematics.max_c_step_deg < 5.0, "{:?}", v.kinematics);
+    assert!(
+        v.kinematics.a_out_of_range.is_none() && v.kinematics.c_flips == 0 && v.kinematics.max_c_step_deg < 5.0,
+        "{:?}",
+        v.kinematics
+    );
 }
 
 /// `slitpath flank` writes the program and the report; bad options are one line on stderr and
@@ -448,4 +467,18 @@ fn cli_plans_and_reports() {
         assert!(stderr.contains(fault) && stderr.lines().count() == 1, "{extra:?}: {stderr}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The plan's bits are those the browser computes (`tests/wasm.rs` checks the same line); update
+/// `tests/digest/flank.txt` with `SLITPATH_UPDATE_DIGESTS=1 cargo test --release --test flank
+/// digest` after a deliberate change, then run the browser test.
+#[test]
+fn flank_digest_matches_the_shared_file() {
+    let line = flank_digest::flank_digest();
+    if std::env::var_os("SLITPATH_UPDATE_DIGESTS").is_some() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/digest/flank.txt");
+        std::fs::write(&path, format!("{line}\n")).unwrap();
+        return;
+    }
+    assert_eq!(line, flank_digest::expected(), "the flank plan's bits changed (see the doc comment)");
 }

@@ -63,3 +63,14 @@ async fn whole_pipeline_in_the_browser() {
     let bytes = js_sys::ArrayBuffer::from(memory.buffer()).byte_length();
     console_log!("wasm linear memory after all cases (its peak): {:.0} MiB", bytes as f64 / (1024.0 * 1024.0));
 }
+
+#[wasm_bindgen_test]
+async fn flank_in_the_browser() {
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    yield_to_browser().await;
+    match slitpath::bench::run_flank(&now) {
+        Ok(f) => console_log!("wasm (headless Chromium): {}", slitpath::bench::format_flank(&f)),
+        Err(e) => console_log!("the flank case cannot be planned: {e}"),
+    }
+}

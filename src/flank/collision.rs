@@ -50,7 +50,13 @@ pub struct CollisionReport {
 }
 
 /// Checks every move of `toolpath` (module docs); `strips` are the cut ranges.
-pub fn check(tree: &FaceTree, toolpath: &Toolpath, strips: &[Range<usize>], tool: &ConeTool, holder: &Holder) -> CollisionReport {
+pub fn check(
+    tree: &FaceTree,
+    toolpath: &Toolpath,
+    strips: &[Range<usize>],
+    tool: &ConeTool,
+    holder: &Holder,
+) -> CollisionReport {
     let mut flagged = Vec::new();
     let strip_of = |i: usize| strips.iter().position(|r| r.contains(&i));
     for (i, m) in toolpath.moves.iter().enumerate() {
@@ -64,8 +70,12 @@ pub fn check(tree: &FaceTree, toolpath: &Toolpath, strips: &[Range<usize>], tool
             let prev_top = prev.tip + tool.flute_length_mm * prev.axis;
             let reach = tool.top_radius_mm.max(tool.tip_radius_mm) + holder.margin_mm;
             if tree.segment_nearer_than(prev.tip, m.tip, reach) || tree.segment_nearer_than(prev_top, top, reach) {
-                let c = clearance(tree, prev.tip, m.tip, tool.top_radius_mm.max(tool.tip_radius_mm))
-                    .min(clearance(tree, prev_top, top, tool.top_radius_mm.max(tool.tip_radius_mm)));
+                let c = clearance(tree, prev.tip, m.tip, tool.top_radius_mm.max(tool.tip_radius_mm)).min(clearance(
+                    tree,
+                    prev_top,
+                    top,
+                    tool.top_radius_mm.max(tool.tip_radius_mm),
+                ));
                 flagged.push(FlaggedMove { move_index: i, strip: None, what: "rapid", clearance_mm: c });
             }
         }

@@ -157,7 +157,8 @@ fn march(input: &GuideInput, start: f64) -> Result<Option<Guides>, FlankError> {
     };
     let row = first_row(s, &line, input.step_mm);
     let mut up = vec![(start, line.points.clone(), row.clone())];
-    while let Some(next) = next_level(input, up.last().expect("one level").0, &up.last().expect("one row").2, Side::Up) {
+    while let Some(next) = next_level(input, up.last().expect("one level").0, &up.last().expect("one row").2, Side::Up)
+    {
         up.push((next.0, next.1.points, next.2));
     }
     let mut down = vec![(start, line.points, row)];
@@ -455,9 +456,8 @@ mod tests {
 
     #[test]
     fn plane_rows_are_d_apart_and_aligned() {
-        let s = from_triangles(&crate::fixtures::flank_plane(60.0, 50.0, 12, 10), &MeshOptions::default())
-            .unwrap()
-            .surface;
+        let s =
+            from_triangles(&crate::fixtures::flank_plane(60.0, 50.0, 12, 10), &MeshOptions::default()).unwrap().surface;
         let field = guide_field(&s, DVec3::X).unwrap();
         let family = ConeTool { tip_radius_mm: 1.0, top_radius_mm: 2.0, flute_length_mm: 12.0 }.spheres().unwrap();
         let g = guiding_curves(&GuideInput {

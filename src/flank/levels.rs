@@ -154,7 +154,8 @@ mod tests {
 
     #[test]
     fn a_plane_level_is_one_straight_line_along_the_direction() {
-        let s = from_triangles(&crate::fixtures::flank_plane(40.0, 30.0, 10, 8), &MeshOptions::default()).unwrap().surface;
+        let s =
+            from_triangles(&crate::fixtures::flank_plane(40.0, 30.0, 10, 8), &MeshOptions::default()).unwrap().surface;
         let values: Vec<f64> = s.positions.iter().map(|p| p.y).collect();
         for c in [-14.9, -7.3, 0.0, 11.25] {
             let lines = level_set(&s, &values, c, DVec3::X);

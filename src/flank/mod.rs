@@ -500,7 +500,11 @@ pub fn plan(
         blend_tolerance_mm: options.chord_tolerance_mm,
     };
     let cl = crate::gcode::gcode(&toolpath, &gcode_options(Post::Cl))?;
-    let gcode = if options.post == Post::Cl { cl.clone() } else { crate::gcode::gcode(&toolpath, &gcode_options(options.post))? };
+    let gcode = if options.post == Post::Cl {
+        cl.clone()
+    } else {
+        crate::gcode::gcode(&toolpath, &gcode_options(options.post))?
+    };
     timings.post = now() - t;
 
     progress("verify", 6, STAGES);

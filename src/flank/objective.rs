@@ -268,8 +268,9 @@ mod tests {
     fn setup() -> (Grid, Vec<DVec3>, Vec<Footpoint>) {
         let family = ConeTool { tip_radius_mm: 1.0, top_radius_mm: 2.0, flute_length_mm: 8.0 }.spheres().unwrap();
         let row = |first_j: i64, n: usize, y: f64| {
-            let points: Vec<DVec3> =
-                (0..n).map(|k| DVec3::new(2.0 * (first_j + k as i64) as f64, y, 0.02 * y * y + 0.1 * k as f64)).collect();
+            let points: Vec<DVec3> = (0..n)
+                .map(|k| DVec3::new(2.0 * (first_j + k as i64) as f64, y, 0.02 * y * y + 0.1 * k as f64))
+                .collect();
             let normals = points.iter().map(|p| DVec3::new(0.05 * p.x, -0.04 * p.y, 1.0).normalize()).collect();
             BaseRow { first_j, points, normals, tangents: vec![DVec3::X; n] }
         };

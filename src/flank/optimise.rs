@@ -157,7 +157,8 @@ pub fn optimise(
     let scale = weights.approx.max(weights.g1).max(1e-300);
     let mut mu = MU_START * scale;
     loop {
-        let mut current = Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights).evaluate(&x, None).total;
+        let mut current =
+            Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights).evaluate(&x, None).total;
         let mut stalled = 0;
         for _ in 0..o.outer_iterations.max(1) {
             let mut objective = Objective::new(&grid, normals.clone(), feet.clone(), m_ini.clone(), weights);

@@ -268,12 +268,17 @@ mod tests {
             assert!((p.0.truncate().length() - ra).abs() < 2e-4, "on the circle: {}", p.0.truncate().length() - ra);
         }
         // Straight evenly spaced rails gain nothing.
-        let line: Vec<_> = (0..4).map(|j| (DVec3::new(j as f64, 0.0, 0.0), DVec3::new(j as f64, family.length_mm, 0.0))).collect();
+        let line: Vec<_> =
+            (0..4).map(|j| (DVec3::new(j as f64, 0.0, 0.0), DVec3::new(j as f64, family.length_mm, 0.0))).collect();
         assert_eq!(densify(&line, &family, &o), line);
 
         let strips = vec![
             StripPoses { poses: dense.clone(), retract_first: DVec3::X, retract_last: DVec3::X },
-            StripPoses { poses: dense.iter().rev().copied().collect(), retract_first: DVec3::X, retract_last: DVec3::X },
+            StripPoses {
+                poses: dense.iter().rev().copied().collect(),
+                retract_first: DVec3::X,
+                retract_last: DVec3::X,
+            },
         ];
         let (tp, ranges) = assemble(&strips, &tool, &family, 0.0, &o);
         assert_eq!(ranges.len(), 2);

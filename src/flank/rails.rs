@@ -144,8 +144,11 @@ mod tests {
             let normals = points.iter().map(|p| DVec3::new(0.0, -0.2 * p.y, 1.0).normalize()).collect();
             BaseRow { first_j, points, normals, tangents: vec![DVec3::X; n] }
         };
-        let guides =
-            Guides { levels: vec![0.0, 1.0, 2.0], curves: vec![], rows: vec![row(0, 6, 0.0), row(-1, 7, 9.0), row(1, 4, 18.0)] };
+        let guides = Guides {
+            levels: vec![0.0, 1.0, 2.0],
+            curves: vec![],
+            rows: vec![row(0, 6, 0.0), row(-1, 7, 9.0), row(1, 4, 18.0)],
+        };
         let grid = Grid::new(&guides, family);
         assert_eq!(grid.strips(), 2);
         assert_eq!(grid.strip(0).iter().map(|p| p.j).collect::<Vec<_>>(), vec![0, 1, 2, 3, 4, 5]);

@@ -197,7 +197,11 @@ struct Program {
 }
 
 /// Verifies CL data `cl` against `surface` (module docs).
-pub fn verify_flank(surface: &Surface, cl: &str, o: &FlankVerifyOptions) -> Result<FlankVerification, FlankVerifyError> {
+pub fn verify_flank(
+    surface: &Surface,
+    cl: &str,
+    o: &FlankVerifyOptions,
+) -> Result<FlankVerification, FlankVerifyError> {
     if !(1..=crate::verify::MAX_SAMPLES).contains(&o.samples) {
         return Err(FlankVerifyError::InvalidOption {
             field: "samples",
@@ -313,7 +317,8 @@ pub fn verify_samples(
     for (k, devs) in per_strip.iter().enumerate() {
         v.strips.push(strip_figures(k, &program.strips[k], devs));
     }
-    let band = o.seam_band_mm.unwrap_or(0.01 * program.family.contact_length_mm).max(0.01 * program.family.contact_length_mm);
+    let band =
+        o.seam_band_mm.unwrap_or(0.01 * program.family.contact_length_mm).max(0.01 * program.family.contact_length_mm);
     v.seams = seams::seams(&program, tree, samples, &probes, band);
     Ok(v)
 }
@@ -498,19 +503,7 @@ fn read_program(cl: &str) -> Result<Program, FlankVerifyError> {
         .collect();
     let mids: Vec<DVec3> = bounds.iter().map(|(lo, hi)| 0.5 * (*lo + *hi)).collect();
     let (nodes, order) = bvh::build(&bounds, &mids);
-    Ok(Program {
-        poses,
-        segments,
-        strips,
-        cone,
-        family,
-        tool,
-        nodes,
-        order,
-        a_out_of_range,
-        feed,
-        max_axis_norm_error,
-    })
+    Ok(Program { poses, segments, strips, cone, family, tool, nodes, order, a_out_of_range, feed, max_axis_norm_error })
 }
 
 /// The strips' move ranges (first pose .. last pose + 1) from the header comments, or every run

@@ -100,7 +100,13 @@ fn nearest_inside(line: &[(DVec3, DVec3)], x: DVec3) -> Option<(f64, DVec3)> {
     best.filter(|b| !b.2).map(|b| (b.0, b.1))
 }
 
-pub(super) fn seams(p: &Program, tree: &FaceTree, samples: &[SurfaceSample], probes: &[Probe], band: f64) -> Vec<SeamFigures> {
+pub(super) fn seams(
+    p: &Program,
+    tree: &FaceTree,
+    samples: &[SurfaceSample],
+    probes: &[Probe],
+    band: f64,
+) -> Vec<SeamFigures> {
     let mut out = Vec::new();
     for k in 0..p.strips.len().saturating_sub(1) {
         let (top, nr0) = boundary(p, tree, k, 1.0);

@@ -101,11 +101,18 @@ pub fn controller_poses(tips: &[DVec3], axes: &[DVec3]) -> (Vec<ControllerPose>,
                 .collect(),
             None,
         ),
-        Err(crate::gcode::GcodeError::AOutOfRange { index, .. }) => {
-            (tips.iter().zip(axes).map(|(&tip, &axis)| ControllerPose { tip, axis, a_deg: f64::NAN, c_deg: f64::NAN }).collect(), Some(index))
-        }
+        Err(crate::gcode::GcodeError::AOutOfRange { index, .. }) => (
+            tips.iter()
+                .zip(axes)
+                .map(|(&tip, &axis)| ControllerPose { tip, axis, a_deg: f64::NAN, c_deg: f64::NAN })
+                .collect(),
+            Some(index),
+        ),
         Err(_) => (
-            tips.iter().zip(axes).map(|(&tip, &axis)| ControllerPose { tip, axis, a_deg: f64::NAN, c_deg: f64::NAN }).collect(),
+            tips.iter()
+                .zip(axes)
+                .map(|(&tip, &axis)| ControllerPose { tip, axis, a_deg: f64::NAN, c_deg: f64::NAN })
+                .collect(),
             Some(0),
         ),
     }
