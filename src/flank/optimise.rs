@@ -1,23 +1,36 @@
 //! The optimisation of the m-grid (seed 002 §6): footpoints and normals refreshed in an outer
 //! loop, L-BFGS on the frozen objective inside ([`super::objective`], [`super::lbfgs`]).
 //!
-//! What it computes. Starting from the initial grid (eqs. 7–9), each outer iteration
+//! What it computes. F (eq. 18) "with refreshed footpoints" at a grid m is F evaluated with the
+//! normals n_{i,j} (the surface's interpolated normal at the nearest mesh point of m_{i,j}) and,
+//! for every axis sample y^k (eq. 11), its footpoint y^k⊥ and the normal there, all taken at m.
+//! Starting from the initial grid (eqs. 7–9), each outer iteration
 //!
-//! 1. refreshes the normals n_{i,j} (the surface's interpolated normal at the footpoint of
-//!    m_{i,j}, i.e. at its nearest point of the mesh), and for every axis sample y^k (eq. 11)
-//!    its footpoint y^k⊥ and the normal there;
-//! 2. minimises F (eq. 18) with them frozen, by L-BFGS from the current grid.
+//! 1. freezes the normals and footpoints of the current grid m_k;
+//! 2. minimises, by L-BFGS from m_k, the frozen F plus a proximal term μ/(3G)·Σ|m − m_k|²;
+//! 3. keeps the result only if F with refreshed footpoints decreased there (then μ shrinks
+//!    ×0.3); otherwise μ grows ×10 and the step is tried again.
 //!
-//! It stops when an outer iteration moves no grid point more than 10⁻⁹·L (or after
-//! `outer_iterations`). Rigidity (eq. 4) must then hold within `rigidity_tolerance_rel`·L at
+//! Decision (the seed is silent on its outer loop): the proximal damping is needed. With the
+//! footpoints frozen, F_approx only sees each sample's height over a fixed tangent plane, so a
+//! pose may slide and tilt along the surface at no cost, and the other terms (G¹ above all)
+//! push it there: undamped, one outer iteration moved poses 15–20 mm on a sphere cap of radius
+//! 150 mm and the plan diverged. The damped loop is a Levenberg–Marquardt-like method on the
+//! true F: every kept step lowers it, and the term vanishes at a fixed point, so the optimum is
+//! F's own.
+//!
+//! It stops when a kept step moves no grid point more than 10⁻⁸·L, after two kept steps in a
+//! row that lower F by less than a fraction 10⁻⁶, when no damping makes a step lower F, or after
+//! `outer_iterations`. Rigidity (eq. 4) must then hold within `rigidity_tolerance_rel`·L at
 //! every pose; the seed makes it a penalty of the highest weight, and a penalty leaves a
 //! residual that grows with the other terms, so while it does not hold w₁ is multiplied by 10
-//! and the loop resumes from where it stopped (a penalty continuation), up to w₁ = 10⁸; beyond,
-//! the plan is refused with [`FlankError::RigidityNotMet`] naming the worst pose.
+//! and the loop resumes from where it stopped (a penalty continuation), up to 10⁸ times the
+//! given w₁; beyond, the plan is refused with [`FlankError::RigidityNotMet`] naming the worst
+//! pose.
 //!
-//! The poses handed on are the rails of the last solve (with the normals it froze), made exactly
-//! rigid: a and b moved apart or together along their axis about their midpoint to |b − a| = L
-//! (at most half the rigidity tolerance each).
+//! The poses handed on are the rails of the final grid read with its refreshed normals, made
+//! exactly rigid: a and b moved apart or together along their axis about their midpoint to
+//! |b − a| = L (at most half the rigidity tolerance each).
 //!
 //! Preconditions: a grid with at least one strip of at least two poses; K ≥ 2 samples per axis.
 //! Deterministic: sequential footpoint queries, fixed order.
@@ -93,10 +106,6 @@ pub struct OptimiseReport {
 const MU_START: f64 = 0.1;
 const MU_MIN: f64 = 1e-9;
 const MU_MAX: f64 = 1e8;
-
-fn debug() -> bool {
-    cfg!(not(target_arch = "wasm32")) && std::env::var_os("FLANK_DEBUG").is_some()
-}
 
 /// Largest w₁ of the penalty continuation.
 const MAX_RIGID_WEIGHT: f64 = 1e8;
@@ -175,12 +184,6 @@ pub fn optimise(
             let value = Objective::new(&grid, trial_normals.clone(), trial_feet.clone(), m_ini.clone(), weights)
                 .evaluate(&trial, None)
                 .total;
-            if debug() {
-                eprintln!(
-                    "outer {} w1 {:e} mu {:.1e}: {:.6e} -> {:.6e} ({:?}, {} it)",
-                    report.outer_iterations, weights.rigid, mu, current, value, r.stop, r.iterations
-                );
-            }
             if !(value <= current) {
                 // The linearised model was trusted too far: damp more and try again.
                 mu *= 10.0;

@@ -67,8 +67,11 @@ pub struct FlankVerifyOptions {
     /// [None: twice the samples' spacing √(area/samples) for [`verify_flank`], and never less
     /// than 1 % of the contact length d].
     pub seam_band_mm: Option<f64>,
-    /// Within this |A| of the singular pose a C step over 90° is a flip, degrees [2].
+    /// Within this |A| of the singular pose (A = 0), degrees [2] …
     pub near_singular_deg: f64,
+    /// … a feed move turning C by more than this is a C flip, degrees [45]: the table swings
+    /// while the tool's axis barely moves.
+    pub flip_deg: f64,
     /// Also measure the deviation at every vertex [true].
     pub vertices: bool,
 }
@@ -82,6 +85,7 @@ impl Default for FlankVerifyOptions {
             search_mm: None,
             seam_band_mm: None,
             near_singular_deg: 2.0,
+            flip_deg: 45.0,
             vertices: true,
         }
     }
@@ -111,8 +115,11 @@ pub struct StripDeviation {
 pub struct Kinematics {
     pub max_a_step_deg: f64,
     pub max_c_step_deg: f64,
-    /// Feed moves whose C turns more than 90° while |A| is below `near_singular_deg`.
+    /// Feed moves whose C turns more than `flip_deg` with |A| below `near_singular_deg` at
+    /// either end.
     pub c_flips: usize,
+    /// Feed moves where A changes sign (the post's (−A, C + 180°) branch taken through A = 0).
+    pub a_sign_changes: usize,
     /// Feed moves ending with |A| below `near_singular_deg`.
     pub near_singular_moves: usize,
     /// The first move whose axis is beyond the A/C machine's A range (then the verifier swept
@@ -277,7 +284,7 @@ pub fn verify_samples(
         strips: Vec::new(),
         seams: Vec::new(),
         max_axis_norm_error: program.max_axis_norm_error,
-        kinematics: kinematics(&program, o.near_singular_deg),
+        kinematics: kinematics(&program, o.near_singular_deg, o.flip_deg),
         vertex_deviation_mm,
     };
     let (mut within, mut machined_within) = (0usize, 0usize);
@@ -542,11 +549,12 @@ fn strip_ranges(cl: &str, feed: &[bool]) -> Result<Vec<Range<usize>>, FlankVerif
     Ok(out)
 }
 
-fn kinematics(p: &Program, near_singular_deg: f64) -> Kinematics {
+fn kinematics(p: &Program, near_singular_deg: f64, flip_deg: f64) -> Kinematics {
     let mut k = Kinematics {
         max_a_step_deg: 0.0,
         max_c_step_deg: 0.0,
         c_flips: 0,
+        a_sign_changes: 0,
         near_singular_moves: 0,
         a_out_of_range: p.a_out_of_range,
     };
@@ -562,9 +570,52 @@ fn kinematics(p: &Program, near_singular_deg: f64) -> Kinematics {
         if near {
             k.near_singular_moves += 1;
         }
-        if dc > 90.0 && (near || a.a_deg.abs() < near_singular_deg) {
+        if dc > flip_deg && (near || a.a_deg.abs() < near_singular_deg) {
             k.c_flips += 1;
+        }
+        if a.a_deg * b.a_deg < 0.0 {
+            k.a_sign_changes += 1;
         }
     }
     k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// CL data of one strip: `axes` as (A, C) in degrees, tips along X.
+    fn program(axes: &[(f64, f64)]) -> String {
+        let mut cl = String::from("PARTNO t\nUNITS/MM\nMULTAX/ON\nCUTTER/2.0,0,1.0,0,0,5.0,10.0\nFEDRAT/100.0\n");
+        for (k, &(a, c)) in axes.iter().enumerate() {
+            let v = crate::gcode::ac::axis_of(a, c);
+            cl.push_str(&format!("GOTO/{},0,0,{},{},{}\n", k as f64, v.x, v.y, v.z));
+        }
+        cl + "FINI\n"
+    }
+
+    #[test]
+    fn kinematics_counts_flips_near_the_singular_pose() {
+        let p = read_program(&program(&[(30.0, 0.0), (30.0, 5.0), (30.0, 10.0)])).unwrap();
+        let k = kinematics(&p, 2.0, 45.0);
+        assert!((k.max_c_step_deg - 5.0).abs() < 1e-9 && k.max_a_step_deg < 1e-9, "{k:?}");
+        assert_eq!((k.c_flips, k.a_sign_changes, k.near_singular_moves), (0, 0, 0));
+        // Near A = 0 the azimuth swings 80° a move: the table turns C 80°, a flip each time.
+        let p = read_program(&program(&[(1.0, 0.0), (1.0, 80.0), (1.0, 160.0)])).unwrap();
+        let k = kinematics(&p, 2.0, 45.0);
+        assert_eq!((k.c_flips, k.near_singular_moves), (2, 2), "{k:?}");
+        assert!((k.max_c_step_deg - 80.0).abs() < 1e-6);
+        // Through A = 0 the post takes the other branch: A changes sign, C stays.
+        let p = read_program(&program(&[(1.0, 0.0), (1.0, 180.0)])).unwrap();
+        let k = kinematics(&p, 2.0, 45.0);
+        assert_eq!((k.a_sign_changes, k.c_flips), (1, 0), "{k:?}");
+    }
+
+    #[test]
+    fn cutters_that_are_not_cones_are_refused() {
+        let ball = "PARTNO t\nUNITS/MM\nCUTTER/6.0,3.0\nFEDRAT/100\nGOTO/0,0,0\nGOTO/1,0,0\nFINI\n";
+        assert!(matches!(read_program(ball), Err(FlankVerifyError::NoConicalCutter { .. })));
+        let bad_strip = program(&[(30.0, 0.0), (30.0, 5.0)]).replace("FEDRAT", "$$ - strip 1: moves 0-9\nFEDRAT");
+        assert!(matches!(read_program(&bad_strip), Err(FlankVerifyError::BadStrip { strip: 1, last: 9, .. })));
+    }
 }
