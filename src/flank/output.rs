@@ -21,6 +21,12 @@
 //!
 //! The safe height (+Z) is 10 mm above the highest point of the part and of every tool position
 //! (tip and flute top).
+//!
+//! The [`Toolpath`] is the posts' plain input; its spiral-minded parts read as follows here:
+//! `first_contact` is the first strip's first pose, `stats.cut_points` counts every strip's
+//! poses and `stats.retractions` the strips (each ends with a lead-out), so
+//! [`Toolpath::contact_moves`], one pass's slice, does not apply: [`assemble`]'s ranges give
+//! each strip's moves.
 
 use super::tool::{ConeTool, SphereFamily};
 use crate::num;
