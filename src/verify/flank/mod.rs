@@ -21,7 +21,8 @@
 //!   Searched up to `search_mm`; beyond, the sample is *uncovered*.
 //! - **machined** when some strip's cutting moves pass over it: the nearest point of that strip's
 //!   swept volume lies on the flank (not on an end cap) and not before the strip's first pose or
-//!   after its last. Undercut is measured over machined samples only (the bands beside the
+//!   after its last. (Strips are resolved up to 5 % of L beyond the nearest approach: a strip
+//!   farther than that does not finish the point.) Undercut is measured over machined samples only (the bands beside the
 //!   outermost strips are not the tool's to finish); gouges everywhere.
 //!
 //! Figures ([`FlankVerification`]): max gouge and the count of samples deeper than the
@@ -336,24 +337,22 @@ struct Probe {
     best: Option<swept::Approach>,
     /// The strip whose cutting moves pass over the point (module docs), if any.
     machined_by: Option<usize>,
-    /// Per strip with a segment within the search: (strip, nearest approach).
+    /// Per strip whose swept volume comes within 5 % of L of the nearest approach: (strip, its
+    /// nearest approach).
     per_strip: Vec<(usize, swept::Approach)>,
 }
+
+/// Per-strip approaches are resolved within this fraction of L beyond the nearest one.
+const NEAR: f64 = 0.05;
 
 fn probe(program: &Program, q: DVec3, search: f64) -> Probe {
     // Segments whose box is within the search, with their lower bounds from both ends.
     let mut candidates: Vec<(f64, u32, f64, f64)> = Vec::new();
     let mut stack = vec![0u32];
     let search2 = search * search;
-    let mut end_distance: Vec<(u32, f64)> = Vec::new();
-    let at = |m: u32, cache: &mut Vec<(u32, f64)>| -> f64 {
-        if let Some(&(_, d)) = cache.iter().find(|(k, _)| *k == m) {
-            return d;
-        }
+    let at = |m: u32| {
         let p = &program.poses[m as usize];
-        let d = program.cone.distance(q, p.tip, p.axis).0;
-        cache.push((m, d));
-        d
+        program.cone.distance(q, p.tip, p.axis).0
     };
     while let Some(index) = stack.pop() {
         let node = &program.nodes[index as usize];
@@ -368,8 +367,7 @@ fn probe(program: &Program, q: DVec3, search: f64) -> Probe {
         for slot in node.start..node.start + node.count {
             let id = program.order[slot as usize];
             let seg = &program.segments[id as usize];
-            let d0 = at(seg.from, &mut end_distance);
-            let d1 = at(seg.from + 1, &mut end_distance);
+            let (d0, d1) = (at(seg.from), at(seg.from + 1));
             candidates.push((0.5 * (d0 + d1 - seg.motion), id, d0, d1));
         }
     }
@@ -377,7 +375,8 @@ fn probe(program: &Program, q: DVec3, search: f64) -> Probe {
     let mut per_strip: Vec<(usize, swept::Approach, bool)> = Vec::new();
     let mut best: Option<(swept::Approach, usize)> = None;
     for &(lower, id, _, _) in &candidates {
-        if lower > search {
+        // Strips farther than `NEAR` beyond the nearest approach cannot finish this point.
+        if lower > search || best.is_some_and(|(b, _)| lower > b.distance + NEAR * program.family.length_mm) {
             break;
         }
         let seg = &program.segments[id as usize];
