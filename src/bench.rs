@@ -465,6 +465,94 @@ pub fn plan_cases(only: &str) -> Vec<(String, TriMesh)> {
     .collect()
 }
 
+/// The flank benchmark's problem (issue 35): the blade of [`fixtures::blade`] at seed 002
+/// Fig. 17's scale, its tool (L 23.85, r₁ 3, r₂ 10), 10 strips × 20 poses × 30 samples per axis,
+/// the seed's Fig. 17 weights (w₂ = 0.005, w₃ = 1), A/C post, 20 000 verifier samples.
+pub fn flank_case() -> Result<(mesh::Surface, crate::flank::FlankOptions), String> {
+    let options = MeshOptions { tool_axis: -DVec3::X, ..MeshOptions::default() };
+    let surface = mesh::from_triangles(&fixtures::blade(58, 56), &options).map_err(|e| e.to_string())?.surface;
+    let tool = crate::flank::SphereFamily::cone(3.0, 10.0, 23.85).map_err(|e| e.to_string())?;
+    let flank = crate::flank::FlankOptions {
+        tool,
+        direction: -DVec3::Y,
+        strips: Some(10),
+        // The middle section's camber line is 341 mm long: 20 poses per strip.
+        pose_step_mm: Some(341.1 / 19.0),
+        samples_per_axis: 30,
+        weights: crate::flank::Weights { approx: 0.005, g1: 1.0, ..crate::flank::Weights::accuracy() },
+        ..crate::flank::FlankOptions::default()
+    };
+    Ok((surface, flank))
+}
+
+/// Figures of one flank plan, milliseconds and millimetres.
+#[derive(Clone, Debug, Serialize)]
+pub struct FlankFigures {
+    pub faces: usize,
+    pub strips: usize,
+    pub poses: usize,
+    pub samples_per_axis: usize,
+    pub unknowns: usize,
+    pub outer_iterations: usize,
+    pub lbfgs_iterations: usize,
+    pub guide_ms: f64,
+    pub optimise_ms: f64,
+    pub output_ms: f64,
+    pub verify_ms: f64,
+    pub total_ms: f64,
+    pub max_error_mm: f64,
+    pub max_kink_deg: f64,
+    pub moves: usize,
+}
+
+/// Plans the flank case once, timed with `now` (milliseconds).
+pub fn run_flank(now: &dyn Fn() -> f64) -> Result<FlankFigures, String> {
+    let (surface, options) = flank_case()?;
+    let plan = crate::flank::plan(&surface, &options, &mut |_, _, _| {}, now).map_err(|e| e.to_string())?;
+    let r = &plan.report;
+    let f = &r.optimise.final_figures;
+    let kink =
+        r.verify.as_ref().map_or(f64::NAN, |v| v.seams.iter().map(|s| s.envelope_max_kink_deg).fold(0.0, f64::max));
+    Ok(FlankFigures {
+        faces: surface.triangles.len(),
+        strips: r.guide.strips,
+        poses: r.optimise.poses,
+        samples_per_axis: r.options.samples_per_axis,
+        unknowns: r.optimise.unknowns,
+        outer_iterations: r.optimise.outer_iterations,
+        lbfgs_iterations: r.optimise.lbfgs_iterations,
+        guide_ms: r.timings_ms.field + r.timings_ms.guide,
+        optimise_ms: r.timings_ms.optimise,
+        output_ms: r.timings_ms.envelope + r.timings_ms.output + r.timings_ms.post,
+        verify_ms: r.timings_ms.verify,
+        total_ms: r.timings_ms.total,
+        max_error_mm: f.max_distance_error_mm.max(-f.min_distance_error_mm),
+        max_kink_deg: kink,
+        moves: r.output.moves,
+    })
+}
+
+pub fn format_flank(f: &FlankFigures) -> String {
+    format!(
+        "flank, blade ({} faces), {} strips × {} poses × {} samples ({} unknowns): guide {:.0} ms, optimise {:.0} ms ({} outer, {} L-BFGS iterations), envelope + program {:.0} ms, verify {:.0} ms, total {:.0} ms; max error {:.3} mm, max kink {:.3}°, {} moves",
+        f.faces,
+        f.strips,
+        f.poses / f.strips.max(1),
+        f.samples_per_axis,
+        f.unknowns,
+        f.guide_ms,
+        f.optimise_ms,
+        f.outer_iterations,
+        f.lbfgs_iterations,
+        f.output_ms,
+        f.verify_ms,
+        f.total_ms,
+        f.max_error_mm,
+        f.max_kink_deg,
+        f.moves
+    )
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -506,6 +594,13 @@ mod tests {
         assert!(f.max_scallop_mm > 0.01 && f.max_scallop_mm < 0.02, "{}", f.max_scallop_mm);
         assert_eq!(f.uncovered_samples, 0);
         assert!(f.build_ms > 0.0 && f.verify_ms > 0.0);
+    }
+
+    #[test]
+    fn the_flank_case_is_the_issue_s_problem_size() {
+        let (surface, options) = super::flank_case().unwrap();
+        assert!(surface.triangles.len() > 6000);
+        assert_eq!((options.strips, options.samples_per_axis), (Some(10), 30));
     }
 }
 

@@ -17,6 +17,7 @@
 //! | rings bridged into one spiral around the holes | [`spiral`] | implemented |
 //! | ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
 //! | G-code posts (LinuxCNC, GRBL, A/C 5-axis) and CL data | [`gcode`] | implemented |
+//! | flank strategy (seed 002): conical tool, G¹ multi-strip paths | [`flank`] | implemented |
 //! | scallop simulation of the final path | [`verify`] | implemented |
 //! | the whole pipeline, stage by stage | [`plan`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
@@ -25,6 +26,7 @@
 pub mod bench;
 mod bvh;
 pub mod fixtures;
+pub mod flank;
 pub mod flatten;
 mod flip;
 pub mod gcode;

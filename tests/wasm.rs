@@ -350,3 +350,47 @@ fn conformal_core_is_bit_identical_to_native() {
         assert_eq!(Some(line.as_str()), digest::expected_line(name), "{name}: wasm differs from native");
     }
 }
+
+// --- The flank strategy (issue 35) --------------------------------------------------------------
+
+#[path = "digest/flank.rs"]
+mod flank_digest;
+
+/// A flank plan computed in the browser has the same bits as natively (`tests/flank.rs` checks
+/// the same line of `tests/digest/flank.txt`).
+#[wasm_bindgen_test]
+fn flank_plan_is_bit_identical_to_native() {
+    assert_eq!(flank_digest::flank_digest(), flank_digest::expected(), "wasm differs from native");
+}
+
+/// The facade's `planFlank`: typed arrays of matching lengths, the report object, faults as
+/// `Error`s naming them.
+#[wasm_bindgen_test]
+fn plan_flank_returns_the_plan_as_typed_arrays() {
+    let mesh = slitpath::fixtures::flank_plane(60.0, 50.0, 12, 10);
+    let stl = slitpath::mesh::stl::write_binary(&mesh, "plane");
+    let options = js_sys::JSON::parse(
+        r#"{"tipRadiusMm": 1, "topRadiusMm": 2, "fluteLengthMm": 12, "direction": [1, 0, 0], "poseStepMm": 6,
+            "weights": "g1", "post": "cl", "verifySamples": 500}"#,
+    )
+    .unwrap();
+    let plan = slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, options, None).unwrap();
+    let moves = plan.tips().len() / 3;
+    assert!(moves > 10 && plan.axes().len() == 3 * moves);
+    assert_eq!(plan.strip_moves().len(), 2 * 4);
+    let poses: u32 = plan.poses_per_strip().iter().sum();
+    assert_eq!(plan.contact_points().len(), 3 * poses as usize * plan.contact_samples() as usize);
+    assert_eq!(plan.vertex_deviation().len(), plan.positions().len() / 3);
+    assert!(plan.gcode().starts_with("PARTNO ") && plan.cl() == plan.gcode());
+    let report = plan.report().unwrap();
+    let guide = Reflect::get(&report, &"guide".into()).unwrap();
+    assert_eq!(Reflect::get(&guide, &"strips".into()).unwrap().as_f64(), Some(4.0));
+    let bad = js_sys::JSON::parse(r#"{"tipRadiusMm": -1}"#).unwrap();
+    let err: js_sys::Error =
+        JsValue::from(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, bad, None).err().unwrap())
+            .dyn_into()
+            .unwrap();
+    assert!(String::from(err.message()).contains("tip_radius_mm"), "{}", String::from(err.message()));
+    let unknown = js_sys::JSON::parse(r#"{"radius": 1}"#).unwrap();
+    assert!(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, unknown, None).is_err());
+}

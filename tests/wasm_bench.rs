@@ -86,3 +86,14 @@ async fn path_length_in_the_browser() {
     }
     console_log!("{}", slitpath::bench::summarise_lengths(&rows, failed));
 }
+
+#[wasm_bindgen_test]
+async fn flank_in_the_browser() {
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    yield_to_browser().await;
+    match slitpath::bench::run_flank(&now) {
+        Ok(f) => console_log!("wasm (headless Chromium): {}", slitpath::bench::format_flank(&f)),
+        Err(e) => console_log!("the flank case cannot be planned: {e}"),
+    }
+}

@@ -1,7 +1,7 @@
 //! Neutral cutter-location data (APT CLSF style) and its reader.
 
 use super::{header_lines, sanitize_comment, Fmt, GcodeOptions, MAX_NAME_CHARS};
-use crate::toolpath::Toolpath;
+use crate::toolpath::{ToolShape, Toolpath};
 use glam::DVec3;
 
 pub(super) fn write(toolpath: &Toolpath, options: &GcodeOptions) -> String {
@@ -22,7 +22,18 @@ pub(super) fn write(toolpath: &Toolpath, options: &GcodeOptions) -> String {
     line("UNITS/MM");
     line("MULTAX/ON");
     line(&format!("LOADTL/{}", tool.number));
-    line(&format!("CUTTER/{},{}", f.num(2.0 * tool.radius_mm), f.num(tool.radius_mm)));
+    match tool.shape {
+        ToolShape::Ball => line(&format!("CUTTER/{},{}", f.num(2.0 * tool.radius_mm), f.num(tool.radius_mm))),
+        // APT's 7-parameter cutter d, r, e, f, a, b, h: tip diameter, no corner radius, the
+        // corner on the tip circle, flat bottom, the flank's taper from the axis, flute length.
+        ToolShape::Cone { tip_radius_mm, top_radius_mm, flute_length_mm } => line(&format!(
+            "CUTTER/{},0,{},0,0,{},{}",
+            f.num(2.0 * tip_radius_mm),
+            f.num(tip_radius_mm),
+            f.with(super::cone_taper_deg(tip_radius_mm, top_radius_mm, flute_length_mm), ijk),
+            f.num(flute_length_mm)
+        )),
+    }
     line(&format!("SPINDL/RPM,{},CLW", f.with(tool.spindle_rpm, 1)));
     let mut fedrat: Option<String> = None;
     for m in &toolpath.moves {
@@ -72,6 +83,8 @@ pub struct ClProgram {
     pub tool_number: Option<u32>,
     pub cutter_diameter_mm: Option<f64>,
     pub corner_radius_mm: Option<f64>,
+    /// Every number of the `CUTTER` statement, in order (APT: d, r, e, f, a, b, h).
+    pub cutter: Vec<f64>,
     pub spindle_rpm: Option<f64>,
     pub moves: Vec<ClMove>,
 }
@@ -138,6 +151,7 @@ pub fn parse_cl(text: &str) -> Result<ClProgram, ClError> {
                 }
                 program.cutter_diameter_mm = Some(v[0]);
                 program.corner_radius_mm = v.get(1).copied();
+                program.cutter = v;
             }
             "SPINDL" => {
                 if let Some(i) = args.iter().position(|a| a.eq_ignore_ascii_case("RPM")) {

@@ -48,7 +48,7 @@ mod ngc;
 
 pub use cl::{parse_cl, ClError, ClMove, ClProgram};
 
-use crate::toolpath::Toolpath;
+use crate::toolpath::{ToolShape, Toolpath};
 
 /// The post-processors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
@@ -185,6 +185,15 @@ fn check(toolpath: &Toolpath, options: &GcodeOptions) -> Result<(), GcodeError> 
             return Err(GcodeError::BadTool { field, value });
         }
     }
+    if let ToolShape::Cone { tip_radius_mm, top_radius_mm, flute_length_mm } = tool.shape {
+        for (field, value) in
+            [("tip_radius_mm", tip_radius_mm), ("top_radius_mm", top_radius_mm), ("flute_length_mm", flute_length_mm)]
+        {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(GcodeError::BadTool { field, value });
+            }
+        }
+    }
     for (index, m) in toolpath.moves.iter().enumerate() {
         if !(m.tip.is_finite() && m.axis.is_finite()) {
             return Err(GcodeError::NonFiniteMove { index });
@@ -234,21 +243,35 @@ pub fn sanitize_comment(text: &str, max_chars: usize) -> String {
 /// The header lines common to every post (without comment delimiters): part, tool, caller's.
 fn header_lines(toolpath: &Toolpath, options: &GcodeOptions, f: &Fmt) -> Vec<String> {
     let tool = &toolpath.tool;
-    let mut lines = vec![
-        format!("part: {}", sanitize_comment(&options.part_name, MAX_NAME_CHARS)),
-        format!(
+    let tool_line = match tool.shape {
+        ToolShape::Ball => format!(
             "- tool: T{} ball-end D{} R{} at {} rpm",
             tool.number,
             f.num(2.0 * tool.radius_mm),
             f.num(tool.radius_mm),
             f.with(tool.spindle_rpm, 1)
         ),
-    ];
+        ToolShape::Cone { tip_radius_mm, top_radius_mm, flute_length_mm } => format!(
+            "- tool: T{} conical flank cutter tip D{} top D{} flute L{} taper {} deg at {} rpm",
+            tool.number,
+            f.num(2.0 * tip_radius_mm),
+            f.num(2.0 * top_radius_mm),
+            f.num(flute_length_mm),
+            f.num(cone_taper_deg(tip_radius_mm, top_radius_mm, flute_length_mm)),
+            f.with(tool.spindle_rpm, 1)
+        ),
+    };
+    let mut lines = vec![format!("part: {}", sanitize_comment(&options.part_name, MAX_NAME_CHARS)), tool_line];
     for (k, v) in &options.header {
         let line = format!("{}: {}", sanitize_comment(k, MAX_HEADER_CHARS), sanitize_comment(v, MAX_HEADER_CHARS));
         lines.push(format!("- {}", sanitize_comment(&line, MAX_HEADER_CHARS)));
     }
     lines
+}
+
+/// The half-angle of a conical flute, degrees: atan((top − tip) / flute length).
+pub fn cone_taper_deg(tip_radius_mm: f64, top_radius_mm: f64, flute_length_mm: f64) -> f64 {
+    crate::num::atan2(top_radius_mm - tip_radius_mm, flute_length_mm).to_degrees()
 }
 
 /// Fixed-decimal number formatting (deterministic on every target: Rust's own float printing).

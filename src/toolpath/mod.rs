@@ -172,8 +172,30 @@ pub struct Move {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Tool {
     pub number: u32,
+    /// The ball radius (for a conical tool: its tip radius), mm.
     pub radius_mm: f64,
     pub spindle_rpm: f64,
+    /// The cutter's shape (a ball unless a strategy says otherwise; not serialised for a ball,
+    /// so the spiral's reports are unchanged).
+    #[serde(skip_serializing_if = "ToolShape::is_ball")]
+    pub shape: ToolShape,
+}
+
+/// The shape of a [`Tool`]'s cutting part.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub enum ToolShape {
+    /// A ball end of the tool's radius.
+    #[default]
+    Ball,
+    /// A tapered (or straight) flat-ended flute for flank milling ([`crate::flank`]): radius
+    /// `tip_radius_mm` at the tip, `top_radius_mm` at the flute's top, `flute_length_mm` long.
+    Cone { tip_radius_mm: f64, top_radius_mm: f64, flute_length_mm: f64 },
+}
+
+impl ToolShape {
+    pub fn is_ball(&self) -> bool {
+        matches!(self, ToolShape::Ball)
+    }
 }
 
 /// Figures of a toolpath.
@@ -329,7 +351,12 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
     Ok(Toolpath {
         moves,
         stats,
-        tool: Tool { number: options.tool_number, radius_mm: o.radius, spindle_rpm: options.spindle_rpm },
+        tool: Tool {
+            number: options.tool_number,
+            radius_mm: o.radius,
+            spindle_rpm: options.spindle_rpm,
+            shape: ToolShape::Ball,
+        },
         first_contact,
     })
 }

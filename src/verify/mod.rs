@@ -41,6 +41,7 @@
 //! on every target (only `+ − × ÷ sqrt`).
 
 mod capsule;
+pub mod flank;
 mod reach;
 mod swept;
 

@@ -8,6 +8,10 @@
 //! The page holds one opaque [`Planner`] per loaded part. Later stages (flatten, slit map, origin,
 //! spiral, G-code) become further methods on it, each a few lines of conversion.
 
+mod flank;
+
+pub use flank::{plan_flank, FlankPlan};
+
 use std::sync::Once;
 
 use serde::{Deserialize, Serialize};

@@ -6,6 +6,9 @@
 //!   flattens the part and writes its conformal slit map.
 //! - `plan PART.stl --radius R --scallop H [--axes 3|5] [--post …] [--origin …] -o OUT [--report R.json]`:
 //!   plans the spiral and writes G-code (or CL data) and the plan report.
+//! - `flank PART.stl --tip-radius … --top-radius … --flute-length … --direction X,Y,Z [--strips N]
+//!   [--weights accuracy|g1|W2,W3] --post ac|cl -o OUT [--report R.json]`: 5-axis flank milling
+//!   with a conical tool (seed 002); `--axis` gives the tool's side of an open surface.
 //! - `fixture NAME -o FILE.stl`: writes one of the analytic test surfaces as binary STL.
 //!
 //! Errors go to stderr as one line and the exit code is non-zero; no panic reaches the user.
@@ -16,6 +19,8 @@
 #[global_allocator]
 static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+#[cfg(not(target_arch = "wasm32"))]
+mod flank;
 #[cfg(not(target_arch = "wasm32"))]
 mod map;
 #[cfg(not(target_arch = "wasm32"))]
@@ -128,6 +133,14 @@ mod cli {
             /// Where to write the plan report (JSON).
             #[arg(long)]
             report: Option<PathBuf>,
+            #[command(flatten)]
+            mesh: MeshArgs,
+        },
+        /// Plans 5-axis flank milling with a conical tool (seed 002) and writes A/C G-code or CL
+        /// data. `--axis` is the side of the surface the tool is on.
+        Flank {
+            #[command(flatten)]
+            args: crate::flank::FlankArgs,
             #[command(flatten)]
             mesh: MeshArgs,
         },
@@ -255,8 +268,17 @@ mod cli {
                 }
                 Ok(())
             }
+            Command::Flank { args, mesh: m } => {
+                let (program, json) = crate::flank::run(&args, &m.options())?;
+                write(&args.output, program.as_bytes())?;
+                if let Some(report) = &args.report {
+                    write(report, json.as_bytes())?;
+                }
+                Ok(())
+            }
             Command::Fixture { list: true, .. } => {
                 fixtures::NAMES.iter().for_each(|n| println!("{n}"));
+                fixtures::FLANK_NAMES.iter().for_each(|n| println!("{n}  (a flank-milling surface)"));
                 println!("gen:SEED[:FACES]  (a generated part: outline, relief, holes and meshing drawn from SEED)");
                 println!("panel:EDGE_MM     (the 120 × 80 mm panel with six holes: 0.75 ≈ 40k faces, 0.275 ≈ 300k)");
                 Ok(())
