@@ -194,18 +194,26 @@ fn the_eccentric_annulus_rings_are_shorter() {
 
 #[test]
 fn a_larger_alpha_gives_smoother_and_no_shorter_paths() {
-    // Seed 003 §3.1 (Fig. 9): as α grows the path turns less (ρ², eq. 33) and is no shorter.
+    // Seed 003 §3.1 (Fig. 9): as α grows the field bends less (E_n + E_g), the path is no
+    // shorter and turns less (ρ², eq. 33) than with the weakest smoothing. ρ² is a property of
+    // the spiral drawn through the spacing's rings, so between two strong α it may go either
+    // way by a few per cent; it is compared with α = 1 only.
     let p = planner(&fixtures::freeform_4_holes());
-    let mut last: Option<(f64, f64)> = None;
+    let mut rows: Vec<(f64, f64, f64)> = Vec::new();
     for alpha in [1.0, 10.0, 100.0] {
         let options = PlanOptions { alpha, verify_samples: 0, ..PlanOptions::default() };
         let plan = p.plan(&options, &mut |_, _, _| {}, &|| 0.0).unwrap();
+        let stage = plan.report.optimise.as_ref().and_then(|o| o.stage.as_ref()).expect("optimised");
+        let bending = stage.after.e_n + stage.after.e_g;
         let (length, rho2) = (plan.report.path.length_mm, plan.report.path.rho2);
-        println!("α {alpha}: {length:.1} mm, ρ² {rho2:.1}");
-        if let Some((l, r)) = last {
+        println!("α {alpha}: {length:.1} mm, ρ² {rho2:.1}, E_n + E_g {bending:.4}");
+        if let Some(&(l, _, b)) = rows.last() {
             assert!(length >= l * 0.999, "α {alpha}: {length} mm after {l} mm");
-            assert!(rho2 <= r * 1.001, "α {alpha}: ρ² {rho2} after {r}");
+            assert!(bending <= b * 1.001, "α {alpha}: E_n + E_g {bending} after {b}");
         }
-        last = Some((length, rho2));
+        rows.push((length, rho2, bending));
+    }
+    for &(_, rho2, _) in &rows[1..] {
+        assert!(rho2 < 0.5 * rows[0].1, "ρ² {rho2} against {} at α 1", rows[0].1);
     }
 }
