@@ -29,6 +29,7 @@ pub mod fixtures;
 pub mod flank;
 pub mod flatten;
 mod flip;
+pub mod fuzz;
 pub mod gcode;
 mod hash;
 pub mod linalg;

@@ -702,8 +702,25 @@ fn check_options(o: &PlanOptions, surface: &Surface) -> Result<(), PlanError> {
             o.radius_mm, size
         ));
     }
+    // A part in metres read as millimetres, or an h far finer than the part needs, would make
+    // a path of hundreds of kilometres: refused before any stage allocates for it.
+    let ideal_mm = surface.area() / (2.0 * (2.0 * o.radius_mm * o.scallop_mm).sqrt());
+    if ideal_mm > MAX_IDEAL_PATH_MM {
+        return bad(format!(
+            "the path would be at least {:.0} km long (area {:.0} mm², R {} mm, h {} mm), more than the {:.0} km a plan may have: check the STL's units or choose a larger scallop height",
+            ideal_mm / 1e6,
+            surface.area(),
+            o.radius_mm,
+            o.scallop_mm,
+            MAX_IDEAL_PATH_MM / 1e6
+        ));
+    }
     Ok(())
 }
+
+/// The longest flat-plate bound area / (2·√(2Rh)) a plan may have, mm: 50 km, some 5·10⁷
+/// G-code lines, about 25 times the 2 km of a 1 m² panel at R 3, h 0.005.
+pub const MAX_IDEAL_PATH_MM: f64 = 5.0e7;
 
 /// The path figures of the report.
 #[derive(Debug, Clone, Serialize)]
