@@ -36,7 +36,11 @@ fn main() {
                 Ok(row) => {
                     println!("{}", format_sweep(&row));
                     *methods.entry(format!("{:?}", row.flatten.method)).or_insert(0) += 1;
-                    planned += 1;
+                    if row.within_limits() {
+                        planned += 1;
+                    } else {
+                        failures.entry("finish").or_default().push(format!("{}: {}", row.name, row.finish()));
+                    }
                 }
                 Err(f) => {
                     println!("{:<42} FAILED at {}: {}", f.name, f.stage, f.message);

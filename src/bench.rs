@@ -478,9 +478,24 @@ pub struct SweepFigures {
     pub plan_ms: f64,
 }
 
-/// Why a part of the sweep failed: the stage (a [`crate::plan::PlanError::stage`], or `finish`
-/// when the plan ran but its verified figures break the limits of [`SWEEP_LIMITS`]) and what
-/// went wrong.
+impl SweepFigures {
+    /// Whether the verified finish keeps the limits of [`SWEEP_LIMITS`].
+    pub fn within_limits(&self) -> bool {
+        let (max_over_h, uncovered, gouges) = SWEEP_LIMITS;
+        self.max_over_h <= max_over_h && self.uncovered_fraction <= uncovered && self.gouges <= gouges
+    }
+
+    /// The figures [`SweepFigures::within_limits`] judges.
+    pub fn finish(&self) -> String {
+        format!(
+            "max scallop {:.3} h, uncovered {:.2e}, {} gouges",
+            self.max_over_h, self.uncovered_fraction, self.gouges
+        )
+    }
+}
+
+/// Why a part of the sweep could not be planned: the stage ([`crate::plan::PlanError::stage`])
+/// and what went wrong.
 #[derive(Debug, Clone, Serialize)]
 pub struct SweepFailure {
     pub name: String,
@@ -495,8 +510,8 @@ pub const SWEEP_LIMITS: (f64, f64, usize) = (1.02, 1e-3, 0);
 /// The face counts of the sweep's parts: small, so 200 of them take minutes.
 pub const SWEEP_FACES: std::ops::RangeInclusive<usize> = 3_000..=12_000;
 
-/// Plans `part` with its R and h (default options otherwise, `verify_samples` samples) and
-/// checks the verified figures against [`SWEEP_LIMITS`].
+/// Plans `part` with its R and h (default options otherwise, `verify_samples` samples); the
+/// verified figures are the caller's to judge ([`SweepFigures::within_limits`]).
 pub fn run_sweep(
     part: &fixtures::generated::GeneratedPart,
     verify_samples: usize,
@@ -520,16 +535,6 @@ pub fn run_sweep(
         gouges: v.gouges,
         plan_ms: now() - t0,
     };
-    let (max_over_h, uncovered, gouges) = SWEEP_LIMITS;
-    if !(figures.max_over_h <= max_over_h && figures.uncovered_fraction <= uncovered && figures.gouges <= gouges) {
-        return Err(fail(
-            "finish",
-            format!(
-                "max scallop {:.3} h, uncovered {:.2e}, {} gouges",
-                figures.max_over_h, figures.uncovered_fraction, figures.gouges
-            ),
-        ));
-    }
     Ok(figures)
 }
 
