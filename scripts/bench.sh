@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 echo "=== native ==="
-cargo bench --bench mesh --bench conformal --bench origin --bench verify --bench plan --bench length --bench flank --bench fuzz 2>&1 | grep -v -E '^\s*(Compiling|Finished|Running)'
+cargo bench --bench mesh --bench conformal --bench origin --bench verify --bench plan --bench length --bench flank --bench fuzz --bench sweep 2>&1 | grep -v -E '^\s*(Compiling|Finished|Running)'
 echo "=== wasm (headless Chromium) ==="
 # The cases run synchronously in the page for tens of seconds; the runner's default 20 s budget
 # (also its per-request timeout while polling the page) is too short for them.

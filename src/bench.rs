@@ -553,6 +553,92 @@ pub fn format_flank(f: &FlankFigures) -> String {
     )
 }
 
+/// One part of the planned-everywhere sweep (issue 34): planned with its own R and h and the
+/// default options, verified.
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepFigures {
+    pub name: String,
+    pub faces: usize,
+    pub flatten: crate::flatten::FlattenReport,
+    pub max_over_h: f64,
+    pub uncovered_fraction: f64,
+    pub gouges: usize,
+    pub plan_ms: f64,
+}
+
+impl SweepFigures {
+    /// Whether the verified finish keeps the limits of [`SWEEP_LIMITS`].
+    pub fn within_limits(&self) -> bool {
+        let (max_over_h, uncovered, gouges) = SWEEP_LIMITS;
+        self.max_over_h <= max_over_h && self.uncovered_fraction <= uncovered && self.gouges <= gouges
+    }
+
+    /// The figures [`SweepFigures::within_limits`] judges.
+    pub fn finish(&self) -> String {
+        format!(
+            "max scallop {:.3} h, uncovered {:.2e}, {} gouges",
+            self.max_over_h, self.uncovered_fraction, self.gouges
+        )
+    }
+}
+
+/// Why a part of the sweep could not be planned: the stage ([`crate::plan::PlanError::stage`])
+/// and what went wrong.
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepFailure {
+    pub name: String,
+    pub stage: &'static str,
+    pub message: String,
+}
+
+/// The sweep's limits on the verified finish: max scallop ≤ 1.02 h (the pipeline tests' bound),
+/// at most 0.1 % of the samples uncovered, no gouge.
+pub const SWEEP_LIMITS: (f64, f64, usize) = (1.02, 1e-3, 0);
+
+/// The face counts of the sweep's parts: small, so 200 of them take minutes.
+pub const SWEEP_FACES: std::ops::RangeInclusive<usize> = 3_000..=12_000;
+
+/// Plans `part` with its R and h (default options otherwise, `verify_samples` samples); the
+/// verified figures are the caller's to judge ([`SweepFigures::within_limits`]).
+pub fn run_sweep(
+    part: &fixtures::generated::GeneratedPart,
+    verify_samples: usize,
+    now: &dyn Fn() -> f64,
+) -> Result<SweepFigures, SweepFailure> {
+    let fail = |stage: &'static str, message: String| SweepFailure { name: part.name.clone(), stage, message };
+    let t0 = now();
+    let out = mesh::from_triangles(&part.mesh, &MeshOptions::default()).map_err(|e| fail("mesh", e.to_string()))?;
+    let faces = out.surface.triangles.len();
+    let planner = crate::plan::Planner::new(out, now).map_err(|e| fail(e.stage(), e.to_string()))?;
+    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
+    let options = crate::plan::PlanOptions { radius_mm: r, scallop_mm: h, verify_samples, ..Default::default() };
+    let plan = planner.plan(&options, &mut |_, _, _| {}, now).map_err(|e| fail(e.stage(), e.to_string()))?;
+    let v = plan.report.verify.as_ref().ok_or_else(|| fail("verify", "not verified".into()))?;
+    let figures = SweepFigures {
+        name: part.name.clone(),
+        faces,
+        flatten: planner.flattening.report(),
+        max_over_h: v.max_scallop_mm / h,
+        uncovered_fraction: v.uncovered_fraction,
+        gouges: v.gouges,
+        plan_ms: now() - t0,
+    };
+    Ok(figures)
+}
+
+pub fn format_sweep(f: &SweepFigures) -> String {
+    format!(
+        "{:<42} {:>6} {:<10} qc {:.4}/{:<7.3} max {:.3} h  {:>6.0} ms",
+        f.name,
+        f.faces,
+        format!("{:?}", f.flatten.method),
+        f.flatten.quality.qc_mean,
+        f.flatten.quality.qc_max,
+        f.max_over_h,
+        f.plan_ms
+    )
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

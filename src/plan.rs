@@ -10,7 +10,7 @@
 //! The G-code header carries the options and the path figures, never timings or versions, so
 //! that the output is byte-identical wherever it was planned.
 
-use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenQuality, Flattening};
+use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenReport, Flattening};
 use crate::gcode::{self, GcodeError, GcodeOptions, Post};
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::refine::{refine_hole_rims, RefineOptions};
@@ -146,6 +146,26 @@ pub enum PlanError {
     Gcode(#[from] GcodeError),
     #[error("verification: {0}")]
     Verify(#[from] VerifyError),
+}
+
+impl PlanError {
+    /// The stage that failed, as the sweeps group failures: `options`, `mesh`, `flatten`,
+    /// `slitmap`, `origin`, `optimise`, `spacing`, `spiral`, `toolpath`, `gcode` or `verify`.
+    pub fn stage(&self) -> &'static str {
+        match self {
+            PlanError::InvalidOption(_) => "options",
+            PlanError::Mesh(_) => "mesh",
+            PlanError::Flatten(_) => "flatten",
+            PlanError::SlitMap(_) => "slitmap",
+            PlanError::Origin(_) => "origin",
+            PlanError::Optimise(_) => "optimise",
+            PlanError::Spacing(_) => "spacing",
+            PlanError::Spiral(_) => "spiral",
+            PlanError::Toolpath(_) => "toolpath",
+            PlanError::Gcode(_) => "gcode",
+            PlanError::Verify(_) => "verify",
+        }
+    }
 }
 
 /// Stage timings, milliseconds. `flatten` includes the rim refinement before it; `slitmap`
@@ -844,7 +864,8 @@ pub struct OriginReport {
 pub struct PlanReport {
     pub options: OptionsReport,
     pub mesh: MeshReport,
-    pub flatten: FlattenQuality,
+    /// The flattening's method, disk blend, hole fillings and quality figures.
+    pub flatten: FlattenReport,
     pub origin: OriginReport,
     /// Number of rings.
     pub rings: usize,
@@ -886,7 +907,7 @@ impl PlanReport {
         Self {
             options: OptionsReport::new(options),
             mesh: planner.report.clone(),
-            flatten: planner.flattening.quality,
+            flatten: planner.flattening.report(),
             origin: OriginReport {
                 mode,
                 annulus_hole,

@@ -7,7 +7,8 @@ use std::time::Instant;
 use glam::{DVec2, DVec3};
 use slitpath::fixtures;
 use slitpath::flatten::{
-    check, flatten, BffSolver, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenOptions, Flattening,
+    check, flatten, BffSolver, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenMethod, FlattenOptions,
+    Flattening,
 };
 use slitpath::mesh::MeshOptions;
 
@@ -425,6 +426,31 @@ fn disk_target_gives_a_convex_outer_loop() {
             turning += d1.perp_dot(d2).atan2(d1.dot(d2));
         }
         assert!((turning - std::f64::consts::TAU).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn tutte_fallback_is_a_valid_embedding_inside_a_convex_loop() {
+    // The last resort of `BffSolver::flatten`: valid on curved parts with holes and on slivers
+    // (obtuse triangles, negative cotan weights), outer loop convex, less conformal than BFF.
+    let parts = [("saddle_2_holes", fixtures::saddle_2_holes()), ("sliver_mesh", fixtures::sliver_mesh())];
+    for (name, mesh) in parts {
+        let m = surface_mesh(&mesh);
+        let solver = BffSolver::new(m.input(), &FlattenOptions::default()).unwrap();
+        let f = solver.flatten_tutte().unwrap();
+        report(&format!("{name} tutte"), &m, &f);
+        assert_valid(&m, &f);
+        assert_eq!((f.method, f.boundary), (FlattenMethod::Tutte, BoundaryTarget::Disk));
+        let lp = &m.loops[0];
+        let n = lp.len();
+        for i in 0..n {
+            let (a, b, c) = (f.uv[lp[(i + n - 1) % n] as usize], f.uv[lp[i] as usize], f.uv[lp[(i + 1) % n] as usize]);
+            assert!((b - a).perp_dot(c - b) > 0.0, "{name}: outer loop not convex at {i}");
+        }
+        assert!(f.quality.qc_mean < 1.5, "{name}: qc mean {}", f.quality.qc_mean);
+        assert_eq!(solver.flatten_tutte().unwrap(), f, "{name}: deterministic");
+        // BFF itself is valid here: no fallback taken.
+        assert_eq!(solver.flatten().unwrap().method, FlattenMethod::Bff);
     }
 }
 

@@ -4,11 +4,20 @@ use std::f64::consts::PI;
 
 use glam::{DVec2, DVec3};
 
-use super::{check, quality, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenOptions, Flattening};
+use super::fill::{fill_hole, Fill};
+use super::{
+    check, quality, BoundaryTarget, Extension, FlattenError, FlattenInput, FlattenMethod, FlattenOptions, Flattening,
+    HoleFills,
+};
 use crate::linalg::{cotan_weights, mesh_order, SparseCholesky};
 use crate::num;
 
 const NONE: u32 = u32::MAX;
+
+/// The smallest edge weight of the Tutte fallback ([`BffSolver::flatten_tutte`]): cotan weights
+/// are clamped up to it, so every weight is positive (Floater's theorem needs that) while the
+/// weights of well-shaped triangles, about 0.3–1, are kept as they are.
+pub const TUTTE_MIN_WEIGHT: f64 = 1e-2;
 
 /// BFF state for one mesh: the hole-filled disk, its curvature data and the factorisations.
 /// Build once with [`BffSolver::new`], then call [`BffSolver::flatten`] (free boundary) or
@@ -39,6 +48,10 @@ pub struct BffSolver {
     aii: Option<SparseCholesky>,
     /// Neumann Laplacian without the row and column of `outer[0]` (pinned to 0), for the conjugate.
     neumann: SparseCholesky,
+    /// The fill-reducing vertex order of both factorisations (for the Tutte fallback's own).
+    order: Vec<u32>,
+    /// How the holes were filled.
+    hole_fills: HoleFills,
 }
 
 impl BffSolver {
@@ -54,7 +67,7 @@ impl BffSolver {
         let n_real = input.positions.len();
 
         // Angle sums of the real triangles; the fills add theirs below.
-        let mut angle_sum = vec![0.0; n_real + input.loops.len() - 1];
+        let mut angle_sum = vec![0.0; n_real];
         for t in input.triangles {
             for c in 0..3 {
                 let p = input.positions[t[c] as usize];
@@ -64,10 +77,29 @@ impl BffSolver {
             }
         }
         let mut weights = cotan_weights(input.positions, input.triangles);
-        for h in 1..input.loops.len() {
-            let c = (n_real + h - 1) as u32;
-            fill_hole(input.positions, &input.loops[h], c, &mut angle_sum, &mut weights)
+        // The virtual vertex of each hole filled by a fan (see `fill`), by loop.
+        let mut fan_centre = vec![None; input.loops.len()];
+        let mut hole_fills = HoleFills::default();
+        for (h, rim) in input.loops.iter().enumerate().skip(1) {
+            let centre = angle_sum.len() as u32;
+            let fill = fill_hole(input.positions, rim, &angle_sum, centre)
                 .ok_or(FlattenError::DegenerateHoleFill { hole: h })?;
+            if matches!(fill.kind, Fill::Fan | Fill::Centroid) {
+                angle_sum.push(0.0);
+                fan_centre[h] = Some(centre);
+            }
+            for (t, a) in fill.triangles.iter().zip(&fill.angles) {
+                for k in 0..3 {
+                    angle_sum[t[k] as usize] += a[k];
+                }
+            }
+            weights.extend_from_slice(&fill.weights);
+            match fill.kind {
+                Fill::Fan => hole_fills.fan += 1,
+                Fill::Triangulated => hole_fills.triangulated += 1,
+                Fill::Projected => hole_fills.projected += 1,
+                Fill::Centroid => hole_fills.centroid += 1,
+            }
         }
         // Rim edges now appear twice (real side and fill side): merge.
         weights.sort_by_key(|&(i, j, _)| (i, j));
@@ -103,8 +135,9 @@ impl BffSolver {
             .collect();
 
         // One AMD order of the mesh graph (shared with the slit map of the same mesh, see
-        // `mesh_order`) serves both systems: each hole's virtual vertex follows the last vertex of
-        // its rim, and each system takes the order induced on its unknowns.
+        // `mesh_order`) serves both systems: a hole's fan centre (if any) follows the last vertex
+        // of its rim, and each system takes the order induced on its unknowns. The fill's own
+        // edges are not in the graph: they only join rim vertices, which AMD puts together.
         let order = {
             let real = mesh_order(n_real, input.triangles)?;
             let mut left: Vec<usize> = input.loops.iter().map(Vec::len).collect();
@@ -121,7 +154,9 @@ impl BffSolver {
                 if li != usize::MAX && li > 0 {
                     left[li] -= 1;
                     if left[li] == 0 {
-                        order.push((n_real + li - 1) as u32);
+                        if let Some(c) = fan_centre[li] {
+                            order.push(c);
+                        }
                     }
                 }
             }
@@ -171,6 +206,8 @@ impl BffSolver {
             lengths,
             aii,
             neumann,
+            order,
+            hole_fills,
         })
     }
 
@@ -179,33 +216,79 @@ impl BffSolver {
         self.outer.len()
     }
 
-    /// Flattening with the outer boundary of [`FlattenOptions::boundary`]. With
-    /// [`FlattenOptions::disk_fallback`], a free boundary that overlaps itself or a hole (BFF's
-    /// free boundary is not guaranteed globally injective) is bent towards the disk: target
-    /// angles `(1−t)·k̃_free + t·k̃_disk` for t = 1/8, 1/4, 1/2, 1, the first valid one wins.
+    /// Flattening with the outer boundary of [`FlattenOptions::boundary`], then, while the result
+    /// is not valid (a flipped triangle, or a loop overlapping itself or another), the fallbacks:
+    ///
+    /// 1. with [`FlattenOptions::disk_fallback`] and the free target, the target angles bent
+    ///    towards the disk's, `(1−t)·k̃_free + t·k̃_disk` for t = 1/8, 1/4, 1/2, 1 (BFF's free
+    ///    boundary is not guaranteed globally injective, e.g. the beetle), the first valid wins;
+    /// 2. with [`FlattenOptions::embedding_fallback`], [`BffSolver::flatten_tutte`].
+    ///
+    /// Every attempt reuses the factorisations but the last, which needs one of its own. If none
+    /// is valid, the first attempt's result is returned (its error names what went wrong).
     pub fn flatten(&self) -> Result<Flattening, FlattenError> {
-        if self.options.boundary == BoundaryTarget::Disk {
-            return self.flatten_disk();
-        }
-        let (u, k_free) = self.free_solve(&vec![0.0; self.outer.len()]);
-        let free = self.layout(&u, &k_free, BoundaryTarget::Free);
-        let overlaps = |r: &Result<Flattening, FlattenError>| match r {
-            Ok(f) => !f.quality.boundary_valid,
-            Err(e) => matches!(e, FlattenError::OverlappingBoundary { .. } | FlattenError::LoopOrientation { .. }),
-        };
-        if !(overlaps(&free) && self.options.disk_fallback) {
-            return free;
-        }
-        let k_disk = self.disk_curvature();
-        let mut last = free;
-        for t in [0.125, 0.25, 0.5, 1.0] {
-            let k: Vec<f64> = k_free.iter().zip(&k_disk).map(|(f, d)| (1.0 - t) * f + t * d).collect();
-            last = self.flatten_with_curvature(&k).map(|f| Flattening { disk_blend: t, ..f });
-            if !overlaps(&last) {
-                break;
+        let valid = |r: &Result<Flattening, FlattenError>| matches!(r, Ok(f) if f.quality.flipped_triangles == 0 && f.quality.boundary_valid);
+        let first = match self.options.boundary {
+            BoundaryTarget::Disk => self.flatten_disk(),
+            BoundaryTarget::Free => {
+                let (u, k_free) = self.free_solve(&vec![0.0; self.outer.len()]);
+                let free = self.layout(&u, &k_free, BoundaryTarget::Free);
+                if valid(&free) || !self.options.disk_fallback {
+                    free
+                } else {
+                    let k_disk = self.disk_curvature();
+                    for t in [0.125, 0.25, 0.5, 1.0] {
+                        let k: Vec<f64> = k_free.iter().zip(&k_disk).map(|(f, d)| (1.0 - t) * f + t * d).collect();
+                        let blended = self.flatten_with_curvature(&k).map(|f| Flattening {
+                            disk_blend: t,
+                            method: FlattenMethod::DiskBlend,
+                            ..f
+                        });
+                        if valid(&blended) {
+                            return blended;
+                        }
+                    }
+                    free
+                }
             }
+        };
+        if valid(&first) || !self.options.embedding_fallback {
+            return first;
         }
-        last
+        let tutte = self.flatten_tutte();
+        if valid(&tutte) {
+            tutte
+        } else {
+            first
+        }
+    }
+
+    /// The last-resort layout: a convex-combination embedding (Tutte 1963; Floater 1997,
+    /// "Parametrization and smooth approximation of surface triangulations") of the hole-filled
+    /// disk. The outer loop is the closed curve of the disk target (BFF §5.2: exterior angles
+    /// `2π·(dual length)/L`, all positive, so the loop is strictly convex) and the interior is its
+    /// harmonic extension with the cotan weights clamped to at least [`TUTTE_MIN_WEIGHT`]. With
+    /// positive weights and a convex boundary the map of a triangulated disk is an embedding
+    /// (Floater's theorem), whatever the geometry: every triangle keeps its orientation and the
+    /// holes' rims, interior curves of the disk, stay simple, disjoint and inside. Away from
+    /// obtuse triangles the weights are the cotan ones, so the map stays nearly conformal there.
+    /// Factorises the clamped Dirichlet block (one more Cholesky factorisation).
+    pub fn flatten_tutte(&self) -> Result<Flattening, FlattenError> {
+        let k_disk = self.disk_curvature();
+        let u = self.neumann_scale_factors(&k_disk);
+        let gamma = self.boundary_curve(&u, &k_disk)?;
+        let clamped: Vec<(u32, u32, f64)> =
+            self.weights.iter().map(|&(i, j, w)| (i, j, w.max(TUTTE_MIN_WEIGHT))).collect();
+        let unknown: Vec<Option<usize>> =
+            self.interior_index.iter().map(|&i| (i != NONE).then_some(i as usize)).collect();
+        let solver = if self.interior.is_empty() {
+            None
+        } else {
+            Some(SparseCholesky::laplacian(&clamped, &unknown, self.interior.len(), &self.order)?)
+        };
+        let a = self.extend_harmonic_with(&clamped, solver.as_ref(), &gamma.iter().map(|g| g.x).collect::<Vec<_>>());
+        let b = self.extend_harmonic_with(&clamped, solver.as_ref(), &gamma.iter().map(|g| g.y).collect::<Vec<_>>());
+        self.finish(&a, &b, BoundaryTarget::Disk, FlattenMethod::Tutte, 1.0)
     }
 
     /// Flattening with prescribed log scale factors `u` on the outer-loop vertices (in loop
@@ -264,8 +347,13 @@ impl BffSolver {
         if !((sum - 2.0 * PI).abs() < 1e-6) {
             return Err(FlattenError::InvalidOption(format!("target exterior angles sum to {sum}, not 2π")));
         }
-        let neumann = &self.neumann;
-        // A u = (−Ω_I, k̃ − k): compatible by Gauss–Bonnet; u(outer[0]) = 0 fixes the constant.
+        let u = self.neumann_scale_factors(k_target);
+        self.layout(&u, k_target, BoundaryTarget::Disk)
+    }
+
+    /// Scale factors for prescribed exterior angles `k̃` (Neumann-to-Dirichlet map, BFF §5.2):
+    /// `A u = (−Ω_I, k̃ − k)`, compatible by Gauss–Bonnet; `u(outer[0]) = 0` fixes the constant.
+    fn neumann_scale_factors(&self, k_target: &[f64]) -> Vec<f64> {
         let mut rhs = vec![0.0; self.n_all];
         for (&v, &om) in self.interior.iter().zip(&self.omega) {
             rhs[v as usize] = -om;
@@ -275,13 +363,14 @@ impl BffSolver {
         }
         let pinned = self.outer[0] as usize;
         rhs.remove(pinned);
-        neumann.solve_in_place(&mut rhs);
+        self.neumann.solve_in_place(&mut rhs);
         rhs.insert(pinned, 0.0);
-        self.layout(&rhs, k_target, BoundaryTarget::Disk)
+        rhs
     }
 
-    /// Steps 3–5: integrate and close the boundary curve, extend it, normalise, measure, check.
-    fn layout(&self, u: &[f64], k_target: &[f64], target: BoundaryTarget) -> Result<Flattening, FlattenError> {
+    /// Step 3: the boundary curve integrated from the target lengths `ℓ̃ = e^{(u_i+u_j)/2} ℓ` and
+    /// exterior angles `k̃`, closed by the minimal change of lengths (BFF §4.3).
+    fn boundary_curve(&self, u: &[f64], k_target: &[f64]) -> Result<Vec<DVec2>, FlattenError> {
         let nb = self.outer.len();
         let mut tangents = Vec::with_capacity(nb);
         let mut phi = 0.0;
@@ -294,10 +383,13 @@ impl BffSolver {
             tangents.push(DVec2::new(num::cos(phi), num::sin(phi)));
             target_len.push(num::exp(0.5 * (u[a] + u[b])) * self.lengths[j]);
         }
+        close_polygon(&tangents, &target_len, &self.lengths).map_err(|edge| FlattenError::BoundaryClosure { edge })
+    }
 
-        // 3. Close the curve: minimise Σ (ℓ*−ℓ̃)²/ℓ subject to Σ ℓ* T = 0 (BFF §4.3).
-        let gamma = close_polygon(&tangents, &target_len, &self.lengths)
-            .map_err(|edge| FlattenError::BoundaryClosure { edge })?;
+    /// Steps 3–5: integrate and close the boundary curve, extend it, normalise, measure, check.
+    fn layout(&self, u: &[f64], k_target: &[f64], target: BoundaryTarget) -> Result<Flattening, FlattenError> {
+        let nb = self.outer.len();
+        let gamma = self.boundary_curve(u, k_target)?;
 
         // 4. Extend to the interior.
         let gx: Vec<f64> = gamma.iter().map(|g| g.x).collect();
@@ -325,7 +417,20 @@ impl BffSolver {
             }
         };
 
-        // 5. Real vertices only; equal total area; area centroid at the origin.
+        let disk_blend = if target == BoundaryTarget::Disk { 1.0 } else { 0.0 };
+        self.finish(&a, &b, target, FlattenMethod::Bff, disk_blend)
+    }
+
+    /// Step 5 on the coordinates `a`, `b` of the filled disk: real vertices only, equal total
+    /// area, area centroid at the origin; then measure and check.
+    fn finish(
+        &self,
+        a: &[f64],
+        b: &[f64],
+        target: BoundaryTarget,
+        method: FlattenMethod,
+        disk_blend: f64,
+    ) -> Result<Flattening, FlattenError> {
         let n_real = self.positions.len();
         let mut uv: Vec<DVec2> = (0..n_real).map(|v| DVec2::new(a[v], b[v])).collect();
         if uv.iter().any(|p| !p.is_finite()) {
@@ -351,8 +456,7 @@ impl BffSolver {
         if self.options.check {
             check(&uv, &self.triangles, &self.loops)?;
         }
-        let disk_blend = if target == BoundaryTarget::Disk { 1.0 } else { 0.0 };
-        Ok(Flattening { uv, quality: q, boundary: target, disk_blend })
+        Ok(Flattening { uv, quality: q, method, hole_fills: self.hole_fills, boundary: target, disk_blend })
     }
 
     fn solve_interior(&self, rhs: &mut [f64]) {
@@ -363,30 +467,42 @@ impl BffSolver {
 
     /// `y = A x` with the (positive semi-definite) cotan Laplacian of the filled disk.
     fn apply_laplacian(&self, x: &[f64]) -> Vec<f64> {
-        let mut y = vec![0.0; x.len()];
-        for &(i, j, w) in &self.weights {
-            let d = w * (x[i as usize] - x[j as usize]);
-            y[i as usize] += d;
-            y[j as usize] -= d;
-        }
-        y
+        apply_weights(&self.weights, x)
     }
 
     /// Harmonic extension of outer-loop values `g` (loop order): `A_II x_I = −A_IB g`.
     fn extend_harmonic(&self, g: &[f64]) -> Vec<f64> {
+        self.extend_harmonic_with(&self.weights, self.aii.as_ref(), g)
+    }
+
+    /// [`Self::extend_harmonic`] with other edge weights on the same graph and `aii` their
+    /// factorised Dirichlet block.
+    fn extend_harmonic_with(&self, weights: &[(u32, u32, f64)], aii: Option<&SparseCholesky>, g: &[f64]) -> Vec<f64> {
         let mut x = vec![0.0; self.n_all];
         for (j, &v) in self.outer.iter().enumerate() {
             x[v as usize] = g[j];
         }
-        let ax = self.apply_laplacian(&x);
+        let ax = apply_weights(weights, &x);
         let mut rhs: Vec<f64> = self.interior.iter().map(|&v| -ax[v as usize]).collect();
-        self.solve_interior(&mut rhs);
+        if let Some(aii) = aii {
+            aii.solve_in_place(&mut rhs);
+        }
         for (&v, &xi) in self.interior.iter().zip(&rhs) {
             x[v as usize] = xi;
         }
-        debug_assert!(self.interior.iter().all(|&v| self.interior_index[v as usize] != NONE));
         x
     }
+}
+
+/// `y = L x` with the (positive semi-definite) Laplacian of the edge `weights`.
+fn apply_weights(weights: &[(u32, u32, f64)], x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; x.len()];
+    for &(i, j, w) in weights {
+        let d = w * (x[i as usize] - x[j as usize]);
+        y[i as usize] += d;
+        y[j as usize] -= d;
+    }
+    y
 }
 
 fn tri_area3(p: &[DVec3], t: [u32; 3]) -> f64 {
@@ -498,7 +614,7 @@ fn validate(input: FlattenInput<'_>, degenerate_rel: f64) -> Result<(), FlattenE
 /// Closes the polygon with edge directions `tangents` and wanted lengths `target` by the minimal
 /// change of lengths in the norm `Σ (ℓ* − ℓ̃)² / ℓ` (BFF §4.3, `mass` = ℓ); returns the vertices
 /// (the first at the origin), or the first edge whose closed length is not positive.
-fn close_polygon(tangents: &[DVec2], target: &[f64], mass: &[f64]) -> Result<Vec<DVec2>, usize> {
+pub(super) fn close_polygon(tangents: &[DVec2], target: &[f64], mass: &[f64]) -> Result<Vec<DVec2>, usize> {
     let (mut m, mut r) = ([0.0f64; 3], DVec2::ZERO);
     for ((t, &lt), &l) in tangents.iter().zip(target).zip(mass) {
         m[0] += l * t.x * t.x;
@@ -521,88 +637,6 @@ fn close_polygon(tangents: &[DVec2], target: &[f64], mass: &[f64]) -> Result<Vec
     Ok(out)
 }
 
-/// Fills hole `rim` (surface on its left) with a fan around virtual vertex `c` whose geometry is
-/// intrinsic and as flat as the rim allows: the rim is laid out in the plane with the turning
-/// angles left over by the real triangles (`π − (2π − Σθ)`), the mismatch to 2π spread by dual
-/// length, closed as in BFF §4.3, and `c` put at its area centroid. On a developable surface this
-/// is exactly the hole of the isometric flattening, so the filling adds no curvature; a 3D
-/// centroid fan would (it is the fallback when the layout fails). Adds the fan's angles and
-/// cotan weights; `None` if both fans are degenerate.
-fn fill_hole(
-    positions: &[DVec3],
-    rim: &[u32],
-    c: u32,
-    angle_sum: &mut [f64],
-    weights: &mut Vec<(u32, u32, f64)>,
-) -> Option<()> {
-    let n = rim.len();
-    // Reverse the rim so the fill is on the left (counter-clockwise around the hole).
-    let q: Vec<u32> = (0..n).map(|m| rim[(n - m) % n]).collect();
-    let len: Vec<f64> =
-        (0..n).map(|m| (positions[q[(m + 1) % n] as usize] - positions[q[m] as usize]).length()).collect();
-    let total: f64 = len.iter().sum();
-    let mut turn: Vec<f64> = q.iter().map(|&v| angle_sum[v as usize] - PI).collect();
-    let defect = 2.0 * PI - turn.iter().sum::<f64>();
-    for m in 0..n {
-        turn[m] += defect * 0.5 * (len[(m + n - 1) % n] + len[m]) / total;
-    }
-    let mut phi = 0.0;
-    let tangents: Vec<DVec2> = (0..n)
-        .map(|m| {
-            if m > 0 {
-                phi += turn[m];
-            }
-            DVec2::new(num::cos(phi), num::sin(phi))
-        })
-        .collect();
-    let intrinsic = close_polygon(&tangents, &len, &len).ok().and_then(|pts| {
-        let (mut area, mut moment) = (0.0, DVec2::ZERO);
-        for m in 0..n {
-            let (a, b) = (pts[m], pts[(m + 1) % n]);
-            let cr = a.perp_dot(b);
-            area += 0.5 * cr;
-            moment += cr * (a + b) / 6.0;
-        }
-        let centre = if area > 0.0 { moment / area } else { pts.iter().copied().sum::<DVec2>() / n as f64 };
-        let fan: Vec<[DVec3; 3]> =
-            (0..n).map(|m| [pts[m].extend(0.0), pts[(m + 1) % n].extend(0.0), centre.extend(0.0)]).collect();
-        fan_ok(&fan).then_some(fan)
-    });
-    // Fallback when the rim cannot be laid out: the plain fan to the 3D length-weighted centroid.
-    let fan = intrinsic.or_else(|| {
-        let mut sum = DVec3::ZERO;
-        for m in 0..n {
-            sum += 0.5 * (positions[q[m] as usize] + positions[q[(m + 1) % n] as usize]) * len[m];
-        }
-        let centre = sum / total;
-        let fan: Vec<[DVec3; 3]> =
-            (0..n).map(|m| [positions[q[m] as usize], positions[q[(m + 1) % n] as usize], centre]).collect();
-        fan_ok(&fan).then_some(fan)
-    })?;
-    for (m, corners) in fan.iter().enumerate() {
-        let ids = [q[m], q[(m + 1) % n], c];
-        let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]).length();
-        for k in 0..3 {
-            let (v, p) = (ids[k], corners[k]);
-            let (a, pa) = (ids[(k + 1) % 3], corners[(k + 1) % 3]);
-            let (b, pb) = (ids[(k + 2) % 3], corners[(k + 2) % 3]);
-            let (e1, e2) = (pa - p, pb - p);
-            angle_sum[v as usize] += num::atan2(cross, e1.dot(e2));
-            weights.push((a.min(b), a.max(b), 0.5 * e1.dot(e2) / cross));
-        }
-    }
-    Some(())
-}
-
-/// Every fan triangle non-degenerate (area above 1e-12 of its longest edge squared) and finite.
-fn fan_ok(fan: &[[DVec3; 3]]) -> bool {
-    fan.iter().all(|t| {
-        let lmax = (0..3).map(|k| (t[(k + 1) % 3] - t[k]).length_squared()).fold(0.0, f64::max);
-        let cross = (t[1] - t[0]).cross(t[2] - t[0]).length();
-        cross.is_finite() && cross > 1e-12 * lmax
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -617,31 +651,5 @@ mod tests {
         assert!((p[2] - DVec2::new(1.0, 1.05)).length() < 1e-15);
         // Impossible: all edges the same way.
         assert!(close_polygon(&[DVec2::X; 3], &[1.0; 3], &[1.0; 3]).is_err());
-    }
-
-    #[test]
-    fn hole_fill_of_a_flat_hole_is_flat() {
-        // A 3×3 grid of unit squares without the middle cell: the rim angles leave a square.
-        let mut p = Vec::new();
-        for j in 0..4 {
-            for i in 0..4 {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
-        let id = |i: u32, j: u32| j * 4 + i;
-        let mut angle_sum = vec![0.0; 17];
-        // Real angles at the rim corners (5, 6, 10, 9): 3π/2 each, the fill gets π/2.
-        for v in [5, 6, 9, 10] {
-            angle_sum[v] = 1.5 * PI;
-        }
-        let rim = [id(1, 1), id(1, 2), id(2, 2), id(2, 1)]; // clockwise: surface on its left
-        let mut w = Vec::new();
-        fill_hole(&p, &rim, 16, &mut angle_sum, &mut w).unwrap();
-        for v in [5, 6, 9, 10, 16] {
-            assert!((angle_sum[v] - 2.0 * PI).abs() < 1e-12, "vertex {v}: {}", angle_sum[v]);
-        }
-        // Right isoceles fan triangles: rim edges get cot(π/2)/2 = 0, spokes cot(π/4)/2 twice.
-        let spoke: f64 = w.iter().filter(|e| e.1 == 16 && e.0 == 5).map(|e| e.2).sum();
-        assert!((spoke - 1.0).abs() < 1e-12);
     }
 }

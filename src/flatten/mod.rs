@@ -6,13 +6,18 @@
 //! (ACM TOG 37(1)), i.e. the log scale factor is `u = 0` on the outer boundary:
 //!
 //! 1. Holes are filled with virtual faces, as BFF's reference implementation does, so the surface
-//!    becomes a disk whose only boundary is `loops[0]`: a fan around one virtual vertex per hole.
-//!    Unlike a fan to the 3D centroid, the fan is *intrinsic*: the rim is laid out in the plane
-//!    with the angles the real triangles leave free (closed like step 3), the virtual vertex at
-//!    its area centroid, and the fan's angles and cotan weights taken from that layout. The
-//!    filling then adds no curvature where none is needed, so developable surfaces with holes
-//!    flatten exactly isometrically. Virtual elements are dropped at the end; hole rims are
-//!    interior curves of a conformal map of a disk, so they stay simple and inside.
+//!    becomes a disk whose only boundary is `loops[0]` (`fill.rs`). The filling is *intrinsic*:
+//!    the rim is laid out in the plane with the angles the real triangles leave free (closed
+//!    like step 3), and that polygon is filled with a fan around a virtual vertex at its area
+//!    centroid where it is star-shaped from there, else triangulated (ear clipping, then
+//!    constrained Delaunay flips); the fill's angles and cotan weights are the layout's. The
+//!    filling then adds no curvature where none is needed (developable surfaces with holes
+//!    flatten exactly isometrically). Virtual elements are dropped at the end; hole rims are
+//!    interior curves of a conformal map of a disk, so they stay simple and inside. (Until
+//!    issue 34 the fan was used whatever the rim: on staircase rims of tilted slots and
+//!    ellipses, not star-shaped from the centroid, some fan triangles were inverted, and BFF
+//!    folded the real triangles beside them — the cause of every "flipped triangles" failure of
+//!    the generated parts.)
 //! 2. Yamabe problem with flat target (all interior and virtual vertices): `A_II u_I = −Ω_I − A_IB u_B` (A the cotan Laplacian,
 //!    Ω the angle defects), then the Dirichlet-to-Neumann map gives the boundary flux
 //!    `h = (A u)_B` and the target exterior angles `k̃ = k + h` (BFF eq. 8, with `k = π − Σθ`).
@@ -22,9 +27,13 @@
 //! 4. The curve is extended to the interior: by default its real part harmonically and the
 //!    imaginary part as the discrete harmonic conjugate (a Neumann problem), BFF's
 //!    "extendCurve"; or both coordinates harmonically ([`Extension::Harmonic`]).
-//!    If the free boundary overlaps itself or a hole (BFF does not guarantee global injectivity,
-//!    e.g. the beetle) and [`FlattenOptions::disk_fallback`] is set, the target angles are bent
-//!    towards those of the disk target of BFF §5.2 (convex outer loop) just enough to be valid.
+//!    If the free boundary overlaps itself or a hole, or a triangle folds (BFF does not guarantee
+//!    global injectivity, e.g. the beetle) and [`FlattenOptions::disk_fallback`] is set, the
+//!    target angles are bent towards those of the disk target of BFF §5.2 (convex outer loop)
+//!    just enough to be valid; if even the disk folds and [`FlattenOptions::embedding_fallback`]
+//!    is set, a convex-combination (Tutte) embedding inside the disk's outer loop is the last
+//!    resort ([`BffSolver::flatten_tutte`]). [`Flattening::method`] says which one was used and
+//!    [`FlattenQuality`] its quasi-conformal distortion.
 //! 5. The result (real vertices only) is scaled so the 2D area equals the 3D area and translated
 //!    so its area centroid is the origin. Rotation is arbitrary.
 //!
@@ -54,8 +63,9 @@
 
 mod bff;
 mod check;
+mod fill;
 
-pub use bff::BffSolver;
+pub use bff::{BffSolver, TUTTE_MIN_WEIGHT};
 pub use check::{check, quality};
 
 use glam::{DVec2, DVec3};
@@ -107,9 +117,14 @@ pub struct FlattenOptions {
     pub extension: Extension,
     /// Outer boundary target. Default [`BoundaryTarget::Free`].
     pub boundary: BoundaryTarget,
-    /// When the free boundary overlaps itself or a hole, flatten onto the disk instead (the slit
-    /// map downstream is indifferent to the outer shape). Default `true`.
+    /// When the free boundary overlaps itself or a hole, or the flattening folds a triangle,
+    /// bend the target angles towards the disk's (the slit map downstream is indifferent to the
+    /// outer shape; see [`BffSolver::flatten`]). Default `true`.
     pub disk_fallback: bool,
+    /// When even the disk target folds a triangle, lay the surface out by a convex-combination
+    /// (Tutte) embedding with clamped cotan weights inside the disk target's convex outer loop
+    /// ([`BffSolver::flatten_tutte`]): a valid embedding, less conformal. Default `true`.
+    pub embedding_fallback: bool,
     /// Run [`check`] on the result and fail with its error. Default `true`.
     pub check: bool,
     /// A triangle whose area is below this fraction of its longest edge squared is degenerate.
@@ -123,6 +138,7 @@ impl Default for FlattenOptions {
             extension: Extension::Conjugate,
             boundary: BoundaryTarget::Free,
             disk_fallback: true,
+            embedding_fallback: true,
             check: true,
             degenerate_rel: 1e-12,
         }
@@ -154,17 +170,71 @@ pub struct FlattenQuality {
     pub boundary_valid: bool,
 }
 
+/// Which layout produced a flattening, from the most conformal to the most robust.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlattenMethod {
+    /// BFF with the target of [`FlattenOptions::boundary`] (free, or the disk), or with the
+    /// scale factors or angles the caller prescribed.
+    Bff,
+    /// BFF with the free target angles bent towards the disk's ([`Flattening::disk_blend`]),
+    /// after the free boundary overlapped or folded.
+    DiskBlend,
+    /// Convex-combination embedding inside the disk target's outer loop, after BFF folded
+    /// even with the disk target ([`BffSolver::flatten_tutte`]).
+    Tutte,
+}
+
+/// How many holes were filled each way before flattening (step 1 of the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct HoleFills {
+    /// A fan around a virtual vertex inside the rim's intrinsic layout (star-shaped from it).
+    pub fan: usize,
+    /// A constrained Delaunay triangulation of the layout (not star-shaped, e.g. staircases).
+    pub triangulated: usize,
+    /// The layout was not simple: the rim projected on its plane, triangulated.
+    pub projected: usize,
+    /// Neither was simple: a fan to the 3D centroid of the rim.
+    pub centroid: usize,
+}
+
+/// What the plan report shows of a flattening: the method, the disk blend, the hole fillings and
+/// the quality figures (serialised at the same level, so `flatten.qc_mean` stays where it was).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FlattenReport {
+    pub method: FlattenMethod,
+    pub disk_blend: f64,
+    pub hole_fills: HoleFills,
+    #[serde(flatten)]
+    pub quality: FlattenQuality,
+}
+
 /// The result: one 2D point per input vertex (same indexing, same triangles) and its quality.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flattening {
     pub uv: Vec<DVec2>,
     pub quality: FlattenQuality,
+    /// The layout that produced `uv`.
+    pub method: FlattenMethod,
+    pub hole_fills: HoleFills,
     /// The outer-boundary target actually used: `Free`, or `Disk` for the disk target, a
     /// prescribed curvature or a fallback.
     pub boundary: BoundaryTarget,
     /// Weight t of the disk in the target angles `(1−t)·k̃_free + t·k̃_disk`: 0 for the free
     /// boundary, 1 for the disk, in between after a partial fallback.
     pub disk_blend: f64,
+}
+
+impl Flattening {
+    /// The report of this flattening (method, blend, hole fillings, quality).
+    pub fn report(&self) -> FlattenReport {
+        FlattenReport {
+            method: self.method,
+            disk_blend: self.disk_blend,
+            hole_fills: self.hole_fills,
+            quality: self.quality,
+        }
+    }
 }
 
 /// Everything that can go wrong; variants carry what is at fault.

@@ -1,0 +1,61 @@
+//! Issue 34's planned-everywhere sweep (native): generated parts of seeds 0..200 (3k–12k faces,
+//! [`SWEEP_FACES`]) planned with their own R and h and verified; prints one row per part, then
+//! the failures grouped by the stage that failed (`finish`: planned, but the verified finish
+//! breaks [`slitpath::bench::SWEEP_LIMITS`]). Asserts nothing.
+//!
+//! `SLITPATH_SWEEP_PARTS=N` sweeps N parts, `SLITPATH_SWEEP_FACES=LO:HI` other face counts.
+
+use slitpath::bench::{format_sweep, run_sweep, SWEEP_FACES};
+use slitpath::fixtures::generated;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+// The CLI's allocator (see src/bin/slitpath/main.rs), so the figures are the CLI's.
+#[global_allocator]
+static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+fn main() {
+    let start = Instant::now();
+    let now = || start.elapsed().as_secs_f64() * 1e3;
+    let count: u64 = std::env::var("SLITPATH_SWEEP_PARTS").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
+    let faces = std::env::var("SLITPATH_SWEEP_FACES")
+        .ok()
+        .and_then(|v| {
+            let (lo, hi) = v.split_once(':')?;
+            Some(lo.parse().ok()?..=hi.parse().ok()?)
+        })
+        .unwrap_or(SWEEP_FACES);
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(8 << 20).build_global();
+    rayon::scope(|_| {
+        println!("planned-everywhere sweep, native: {count} generated parts, {faces:?} faces");
+        let mut failures: BTreeMap<&str, Vec<String>> = BTreeMap::new();
+        let (mut planned, mut methods) = (0, BTreeMap::new());
+        for seed in 0..count {
+            let part = generated::part(seed, faces.clone());
+            match run_sweep(&part, 100_000, &now) {
+                Ok(row) => {
+                    println!("{}", format_sweep(&row));
+                    *methods.entry(format!("{:?}", row.flatten.method)).or_insert(0) += 1;
+                    if row.within_limits() {
+                        planned += 1;
+                    } else {
+                        failures.entry("finish").or_default().push(format!("{}: {}", row.name, row.finish()));
+                    }
+                }
+                Err(f) => {
+                    println!("{:<42} FAILED at {}: {}", f.name, f.stage, f.message);
+                    failures.entry(f.stage).or_default().push(format!("{}: {}", f.name, f.message));
+                }
+            }
+        }
+        let failed: usize = failures.values().map(Vec::len).sum();
+        println!("{planned} planned within the limits, {failed} failed; flattening methods {methods:?}");
+        for (stage, list) in &failures {
+            println!("  {stage}: {}", list.len());
+            for f in list {
+                println!("    {f}");
+            }
+        }
+        println!("total {:.1} s", now() / 1e3);
+    });
+}

