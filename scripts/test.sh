@@ -12,10 +12,12 @@ if [ ! -t 1 ]; then bold="" green="" red="" reset=""; fi
 
 names=() results=() seconds=()
 
-# The bundled sample part, written by the CLI into www/public (copied into the page build).
+# The bundled sample parts, written by the CLI into www/public (copied into the page build): the
+# spiral's freeform part and the flank strategy's blade.
 sample_part() {
   mkdir -p www/public/samples
   cargo run --release --quiet --bin slitpath -- fixture freeform_4_holes -o www/public/samples/freeform_4_holes.stl
+  cargo run --release --quiet --bin slitpath -- fixture blade -o www/public/samples/blade.stl
 }
 
 # step NAME COMMAND...: runs the command in a subshell with `set -e` (so a multi-command
