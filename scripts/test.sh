@@ -108,7 +108,7 @@ else
 fi
 # Playwright (playwright-core) drives Debian's /usr/bin/chromium; screenshots go to test-output/.
 if [ $build_ok -eq 0 ] && [ $lib_ok -eq 0 ] && [ $sample_ok -eq 0 ]; then
-  step "page and package in headless Chromium (Playwright)" node --test --test-concurrency=1 --test-reporter=spec tests/e2e/page.test.mjs tests/e2e/large-part.test.mjs tests/e2e/library.test.mjs
+  step "page and package in headless Chromium (Playwright)" node --test --test-concurrency=1 --test-reporter=spec tests/e2e/page.test.mjs tests/e2e/flank-page.test.mjs tests/e2e/large-part.test.mjs tests/e2e/library.test.mjs
 else
   skip "page and package in headless Chromium (Playwright)" "the page, the package or the sample part did not build"
 fi
