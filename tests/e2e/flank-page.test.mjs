@@ -88,6 +88,17 @@ describe("the flank strategy on the page", { concurrency: false }, () => {
     assert.ok(fromPage.equals(fromCli), `page ${fromPage.length} bytes, CLI ${fromCli.length} bytes: they differ`);
   });
 
+  it("downloads the CL data of the same plan, as `slitpath flank --post cl` writes it", async () => {
+    const [download] = await Promise.all([page.waitForEvent("download", { timeout: PLAN_TIMEOUT }), page.getByTestId("download-cl").click()]);
+    assert.equal(download.suggestedFilename(), "blade.cls");
+    const file = join(output, "page-blade.cls");
+    await download.saveAs(file);
+    const shown = (await page.getByTestId("cli-command").textContent()).split(" ").slice(3).map((a) => (a === "ac" ? "cl" : a));
+    const cliFile = join(output, "cli-blade.cls");
+    cli("flank", BLADE, ...shown, "-o", cliFile);
+    assert.ok(readFileSync(file).equals(readFileSync(cliFile)), "the page's CL data differ from the CLI's");
+  });
+
   it("refuses an impossible tool with a clear error and plans again", async () => {
     const gouge = await metric("metric-flank-gouge");
     const negative = await replan(() => page.getByTestId("opt-flank-top").fill("-1"));
