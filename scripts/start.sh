@@ -14,9 +14,10 @@ bash scripts/setup.sh
 say "building the wasm package (release) into www/pkg"
 wasm-pack build --target web --out-dir www/pkg --release
 
-say "writing the sample part www/public/samples/freeform_4_holes.stl"
+say "writing the sample parts www/public/samples/freeform_4_holes.stl and blade.stl (flank)"
 mkdir -p www/public/samples
 cargo run --release --quiet --bin slitpath -- fixture freeform_4_holes -o www/public/samples/freeform_4_holes.stl
+cargo run --release --quiet --bin slitpath -- fixture blade -o www/public/samples/blade.stl
 
 say "serving the page with Vite on $URL"
 vite www --host 127.0.0.1 --port "$PORT" --strictPort --clearScreen false &

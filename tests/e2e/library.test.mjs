@@ -14,6 +14,7 @@ describe("the npm package (worker-based API)", { concurrency: false }, () => {
     dir = mkdtempSync(join(tmpdir(), "slitpath-lib-"));
     cpSync(join(root, "www/dist-lib"), join(dir, "lib"), { recursive: true });
     cpSync(join(root, "www/public/samples/freeform_4_holes.stl"), join(dir, "part.stl"));
+    cpSync(join(root, "www/public/samples/blade.stl"), join(dir, "blade.stl"));
     writeFileSync(join(dir, "index.html"), '<!doctype html><meta charset="utf-8"><title>portal</title><p>portal</p>');
     server = await serve(dir);
     browser = await launch();
@@ -31,6 +32,47 @@ describe("the npm package (worker-based API)", { concurrency: false }, () => {
     const types = readFileSync(join(root, "www/dist-lib/types/lib/index.d.ts"), "utf8");
     assert.match(types, /SlitpathPlanner/);
     assert.match(readFileSync(join(root, "www/dist-lib/types/lib/client.d.ts"), "utf8"), /plan\(options\?: PlanOptions, callbacks\?: PlanCallbacks\): Promise<PlanResult>/);
+    assert.match(readFileSync(join(root, "www/dist-lib/types/lib/client.d.ts"), "utf8"), /planFlank\(options\?: FlankOptions, callbacks\?: PlanCallbacks\): Promise<FlankResult>/);
+    assert.match(types, /FlankReport/);
+  });
+
+  it("plans flank strips (seed 002): tips, axes and strips as typed arrays, the verifier's figures, the program; a bad tool is refused", async () => {
+    const result = await page.evaluate(async () => {
+      const { SlitpathPlanner, DEFAULT_FLANK_OPTIONS, flankOptions } = await import("./lib/slitpath.js");
+      const planner = new SlitpathPlanner();
+      await planner.load(await (await fetch("blade.stl")).arrayBuffer(), { name: "blade.stl" });
+      const stages = new Set();
+      const options = flankOptions({ ...DEFAULT_FLANK_OPTIONS, tipRadiusMm: 2.87, topRadiusMm: 9.56, fluteLengthMm: 21.8, direction: [0, -1, 0], strips: 4 });
+      const plan = await planner.planFlank({ ...options, verifySamples: 4000 }, { onProgress: (stage) => stages.add(stage) });
+      let bad = "";
+      try {
+        await planner.planFlank({ ...options, fluteLengthMm: 0 });
+      } catch (error) {
+        bad = error.message;
+      }
+      planner.dispose();
+      return {
+        stages: [...stages],
+        moves: plan.tips instanceof Float64Array ? plan.tips.length / 3 : -1,
+        axes: plan.axes.length / 3,
+        strips: [...plan.stripMoves],
+        deviations: plan.vertexDeviation.length,
+        vertices: plan.positions.length / 3,
+        strategy: plan.report.strategy,
+        reportStrips: plan.report.guide.strips,
+        gouge: plan.report.verify?.max_gouge_mm,
+        gcode: plan.gcode.slice(0, 400),
+        bad,
+      };
+    });
+    assert.ok(result.moves > 100 && result.axes === result.moves, JSON.stringify(result));
+    assert.equal(result.strips.length, 2 * 4, "[first, end) per strip");
+    assert.equal(result.reportStrips, 4);
+    assert.equal(result.deviations, result.vertices, "one deviation per vertex");
+    assert.ok(Number.isFinite(result.gouge), `a finite max gouge: ${result.gouge}`);
+    assert.ok(result.stages.includes("optimise"), `progress was reported: ${result.stages}`);
+    assert.match(result.gcode, /post ac/);
+    assert.match(result.bad, /flute_length_mm = 0/);
   });
 
   it("loads and plans with progress, results as typed arrays; a cancel rejects and the planner recovers", async () => {

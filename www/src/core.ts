@@ -2,7 +2,10 @@
 // Everything else imports the types and helpers it needs from here, never from ../pkg, so the
 // rest of the page does not depend on how the core is built. It runs inside the worker.
 
-import init, { Planner, version } from "../pkg/slitpath.js";
+import init, { Planner, planFlank as corePlanFlank, version } from "../pkg/slitpath.js";
+import type { FlankOptions, FlankOutput, FlankReport } from "./flank-types";
+
+export type * from "./flank-types";
 
 /** Options of the mesh stage; every field is optional (defaults live in the Rust core). */
 export interface MeshOptions {
@@ -310,6 +313,30 @@ export class Part {
 
   free(): void {
     this.planner.free();
+  }
+}
+
+/**
+ * Plans flank strips (5-axis, conical tool, seed 002) for the STL `stl`; throws an Error whose
+ * message names the fault (bad tool, rigidity not reached, …). The flank planner needs only the
+ * mesh, not the slit map: it reads the STL itself.
+ */
+export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback): Promise<FlankOutput> {
+  await initCore();
+  const plan = corePlanFlank(stl, meshOptions, options, onProgress);
+  try {
+    return {
+      report: plan.report() as FlankReport,
+      gcode: plan.gcode(),
+      tips: plan.tips(),
+      axes: plan.axes(),
+      stripMoves: plan.stripMoves(),
+      positions: plan.positions(),
+      triangles: plan.triangles(),
+      vertexDeviation: plan.vertexDeviation(),
+    };
+  } finally {
+    plan.free();
   }
 }
 

@@ -5,15 +5,19 @@
 // a failure never removes the last good plan.
 
 import "./style.css";
-import { CancelledError, SlitpathPlanner, type LoadedPart, type PlanResult } from "./lib/index";
-import type { FullPlanOptions } from "./lib/defaults";
-import { cliArguments, initialOptions, persist } from "./options";
+import { CancelledError, SlitpathPlanner, type FlankResult, type LoadedPart, type PlanResult } from "./lib/index";
+import { DEFAULT_FLANK_OPTIONS, flankOptions, type FlankFormOptions, type FullPlanOptions } from "./lib/defaults";
+import { flankCliArguments, flankFromQuery, flankQuery, type Strategy } from "./flank-options";
+import { cliArguments, initialOptions, persist, storedQuery } from "./options";
+import { BLADE_PRESET, BLADE_SAMPLE } from "./samples";
+import { FlankForm } from "./ui/flank-form";
+import { renderFlankMetrics } from "./ui/flank-metrics";
 import { byId } from "./ui/dom";
 import { renderMetrics, renderNoPlan } from "./ui/metrics";
 import { OptionsForm } from "./ui/options-form";
 import { renderReport } from "./ui/report";
 import { readWithProgress, saveText } from "./ui/files";
-import { heatGradientCss } from "./lib/colors";
+import { deviationGradientCss, heatGradientCss } from "./lib/colors";
 import { Views } from "./views/views";
 
 const SAMPLE = "freeform_4_holes.stl";
@@ -40,13 +44,17 @@ const planner = new SlitpathPlanner();
 const views = new Views({ "3d": byId<HTMLCanvasElement>("view-3d"), "2d": byId<HTMLCanvasElement>("view-2d") });
 let options: FullPlanOptions = initialOptions();
 const form = new OptionsForm(byId("options"), options);
+// The strategy and the flank options: defaults, then localStorage, then the URL (like the spiral's).
+let { strategy, flank } = flankFromQuery(location.search, flankFromQuery(storedQuery(), { strategy: "spiral", flank: { ...DEFAULT_FLANK_OPTIONS } }));
+const flankForm = new FlankForm(byId("flank-options"), flank);
+const strategySelect = byId<HTMLSelectElement>("opt-strategy");
 
 /**
  * The part shown (its generation changes with every load) and the last good plan of it. Their
  * big arrays went to the render worker: what stays here is the report, the G-code and counts.
  */
 let part: { loaded: LoadedPart; generation: number } | null = null;
-let shown: { gcode: string; options: FullPlanOptions } | null = null;
+let shown: { gcode: string; strategy: "spiral"; options: FullPlanOptions } | { gcode: string; strategy: "flank"; flank: FlankFormOptions } | null = null;
 let generation = 0;
 let planning = false;
 let replanWanted = false;
@@ -118,13 +126,18 @@ async function plan(): Promise<void> {
   planning = true;
   const mine = part;
   const planned = { ...options };
+  const flanked = { ...flank };
   setStatus("planning", "");
   showProgress("planning", null);
+  const onProgress = (stage: string, done: number, total: number) => showProgress(`${stage} ${done}/${total}`, total > 0 ? done / total : null);
   try {
-    const result = await planner.plan(planned, {
-      onProgress: (stage, done, total) => showProgress(`${stage} ${done}/${total}`, total > 0 ? done / total : null),
-    });
-    if (part?.generation === mine.generation) await show(result, planned);
+    if (strategy === "flank") {
+      const result = await planner.planFlank(flankOptions(flanked), { onProgress });
+      if (part?.generation === mine.generation) await showFlank(result, flanked);
+    } else {
+      const result = await planner.plan(planned, { onProgress });
+      if (part?.generation === mine.generation) await show(result, planned);
+    }
   } catch (error) {
     if (error instanceof CancelledError) setStatus("cancelled", `Planning was cancelled.${lastGood()}`);
     else setStatus(`error: ${message(error)}`, `Not planned.${lastGood()}`);
@@ -141,7 +154,8 @@ async function plan(): Promise<void> {
 
 /** Shows a plan; the status reads "planned" once the views have drawn it. */
 async function show(result: PlanResult, planned: FullPlanOptions): Promise<void> {
-  shown = { gcode: result.gcode, options: planned };
+  shown = { gcode: result.gcode, strategy: "spiral", options: planned };
+  showStrategy("spiral");
   renderMetrics(metricsBox, result, planned.scallopMm);
   const points = result.pathContacts.length / 3;
   const drawn = views.setPlan(result, planned.radiusMm, planned.axes === 5); // transfers the arrays it draws
@@ -150,7 +164,11 @@ async function show(result: PlanResult, planned: FullPlanOptions): Promise<void>
   scrub.value = "0";
   scrub.disabled = points === 0;
   setCursor(0);
+  byId("legend-title").textContent = "scallop";
+  byId("legend-bar").style.background = heatGradientCss();
+  byId("legend-min").textContent = "0";
   byId("legend-max").textContent = `h = ${planned.scallopMm} mm`;
+  byId("legend-extra").hidden = false;
   legend.hidden = !layerHeat.checked;
   setOutputs();
   const { path } = result.report;
@@ -159,24 +177,66 @@ async function show(result: PlanResult, planned: FullPlanOptions): Promise<void>
   setStatus("planned", `${name}: ${result.ringRadii.length} rings, ${path.length_mm.toFixed(0)} mm, ${path.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
+/** Shows a flank plan: the part coloured by the verifier's deviation, the strips' tips and axes. */
+async function showFlank(result: FlankResult, planned: FlankFormOptions): Promise<void> {
+  shown = { gcode: result.gcode, strategy: "flank", flank: planned };
+  showStrategy("flank");
+  renderFlankMetrics(metricsBox, result);
+  const drawn = views.setFlank(result); // transfers the arrays it draws
+  scrub.max = "0";
+  scrub.value = "0";
+  scrub.disabled = true;
+  setCursor(0);
+  const limit = result.drawing.limitMm;
+  byId("legend-title").textContent = "deviation";
+  byId("legend-bar").style.background = deviationGradientCss();
+  byId("legend-min").textContent = `−${limit.toPrecision(2)} mm (gouge)`;
+  byId("legend-max").textContent = `+${limit.toPrecision(2)} mm (left)`;
+  byId("legend-extra").hidden = true;
+  legend.hidden = !layerHeat.checked;
+  setOutputs();
+  const name = part?.loaded.name ?? "";
+  const { output } = result.report;
+  await drawn;
+  setStatus("planned", `${name}: flank, ${result.report.guide.strips} strips, ${output.moves} moves, ${(output.estimated_time_s / 60).toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
+}
+
+/** What the shown plan's strategy needs of the page: the 2D slit map only for the spiral. */
+function showStrategy(shownStrategy: Strategy): void {
+  document.body.classList.toggle("flank-shown", shownStrategy === "flank");
+  byId("layer-heat-label").textContent = shownStrategy === "flank" ? "deviation heat map" : "scallop heat map";
+}
+
 function setOutputs(): void {
   downloadGcode.disabled = downloadCl.disabled = shown === null;
-  const post = shown?.options.post ?? options.post;
+  const post = shown === null ? (strategy === "flank" ? flank.post : options.post) : shown.strategy === "flank" ? shown.flank.post : shown.options.post;
   downloadGcode.textContent = post === "cl" ? "Download CL data" : `Download G-code (${post})`;
 }
 
 function setCursor(index: number): void {
   const points = Number(scrub.max) + 1;
-  scrubLabel.textContent = shown ? `point ${index + 1} of ${points}` : "";
+  // A flank plan has no path points to scrub (its strips are drawn whole).
+  scrubLabel.textContent = shown?.strategy === "spiral" ? `point ${index + 1} of ${points}` : "";
 }
 
 function optionsChanged(next: FullPlanOptions, now = false): void {
   options = next;
-  persist(options);
-  byId("cli-command").textContent = `slitpath plan PART.stl ${cliArguments(options).join(" ")}`;
+  persist(options, flankQuery(strategy, flank));
+  byId("cli-command").textContent =
+    strategy === "flank" ? `slitpath flank PART.stl ${flankCliArguments(flank).join(" ")}` : `slitpath plan PART.stl ${cliArguments(options).join(" ")}`;
   window.clearTimeout(replanTimer);
   if (now) void plan();
   else replanTimer = window.setTimeout(() => void plan(), REPLAN_DELAY_MS);
+}
+
+/** Shows the strategy's options (and plans with it unless `plan` is false). */
+function strategyChanged(next: Strategy, plan = true): void {
+  strategy = next;
+  strategySelect.value = next;
+  byId("options").hidden = next !== "spiral";
+  byId("flank-options").hidden = next !== "flank";
+  document.body.classList.toggle("flank-on", next === "flank");
+  if (plan) optionsChanged(options, true);
 }
 
 /** `part.stl` → `part.ngc` (LinuxCNC, AC), `part.nc` (GRBL), `part.cls` (CL data). */
@@ -188,6 +248,13 @@ function outputName(post: FullPlanOptions["post"]): string {
 
 form.onChange = (next) => optionsChanged(next);
 form.onInvalid = (text) => setStatus(`error: ${text}`, `Not planned.${lastGood()}`);
+flankForm.onChange = (next) => {
+  flank = next;
+  optionsChanged(options);
+};
+flankForm.onInvalid = form.onInvalid;
+strategySelect.addEventListener("change", () => strategyChanged(strategySelect.value === "flank" ? "flank" : "spiral"));
+strategyChanged(strategy, false);
 optionsChanged(options, false);
 window.clearTimeout(replanTimer); // the first plan follows the first load
 
@@ -230,14 +297,16 @@ byId("legend-bar").style.background = heatGradientCss();
 byId("cancel").addEventListener("click", () => planner.cancel());
 
 downloadGcode.addEventListener("click", () => {
-  if (shown) saveText(shown.gcode, outputName(shown.options.post));
+  if (shown) saveText(shown.gcode, outputName(shown.strategy === "flank" ? shown.flank.post : shown.options.post));
 });
 downloadCl.addEventListener("click", async () => {
   if (!shown) return;
-  if (shown.options.post === "cl") return saveText(shown.gcode, outputName("cl"));
+  const post = shown.strategy === "flank" ? shown.flank.post : shown.options.post;
+  if (post === "cl") return saveText(shown.gcode, outputName("cl"));
   showProgress("CL data", null);
   try {
-    const cl = await planner.plan({ ...shown.options, post: "cl" });
+    // The same plan through the CL post: what `--post cl` writes.
+    const cl = shown.strategy === "flank" ? await planner.planFlank(flankOptions({ ...shown.flank, post: "cl" })) : await planner.plan({ ...shown.options, post: "cl" });
     saveText(cl.gcode, outputName("cl"));
   } catch (error) {
     if (!(error instanceof CancelledError)) setStatus(`error: ${message(error)}`, "No CL data.");
@@ -246,16 +315,16 @@ downloadCl.addEventListener("click", async () => {
   }
 });
 
-async function fetchSample(onProgress: (fraction: number) => void): Promise<ArrayBuffer> {
-  const response = await fetch(SAMPLE_URL);
+const fetchSample = (url: string) => async (onProgress: (fraction: number) => void): Promise<ArrayBuffer> => {
+  const response = await fetch(url);
   const type = response.headers.get("content-type") ?? "";
   // A dev server answers unknown paths with the page itself: that is not an STL either.
   if (!response.ok || type.includes("text/html")) {
-    throw new Error(`the sample part ${SAMPLE_URL} is missing (npm start generates it)`);
+    throw new Error(`the sample part ${url} is missing (npm start generates it)`);
   }
   onProgress(0.5);
   return response.arrayBuffer();
-}
+};
 
 function loadFile(file: File): void {
   void loadStl(file.name, (onProgress) => readWithProgress(file, onProgress));
@@ -267,7 +336,17 @@ input.addEventListener("change", () => {
   if (file) loadFile(file);
   input.value = ""; // picking the same file again reloads it
 });
-byId("load-sample").addEventListener("click", () => void loadStl(SAMPLE, fetchSample));
+byId("load-sample").addEventListener("click", () => void loadStl(SAMPLE, fetchSample(SAMPLE_URL)));
+// The flank sample: a blade-like wall, with a tool and direction that suit it (the defaults'
+// direction +X runs along its normals).
+byId("load-blade").addEventListener("click", () => {
+  flank = { ...BLADE_PRESET };
+  flankForm.set(flank);
+  strategyChanged("flank", false);
+  optionsChanged(options);
+  window.clearTimeout(replanTimer); // the plan follows the load
+  void loadStl(BLADE_SAMPLE, fetchSample(`samples/${BLADE_SAMPLE}`));
+});
 
 // Drag and drop anywhere on the page.
 const overlay = byId<HTMLDivElement>("drop-overlay");
@@ -299,6 +378,6 @@ document.addEventListener("drop", (event) => {
 });
 
 // A first visit shows the product working: the bundled sample, planned.
-void loadStl(SAMPLE, fetchSample);
+void loadStl(SAMPLE, fetchSample(SAMPLE_URL));
 // The e2e tests read the views' pixels back through this (the canvases belong to the render worker).
 (window as unknown as { slitpathViews: Views }).slitpathViews = views;

@@ -104,9 +104,9 @@ export function fromQuery(search: string, base: FullPlanOptions): FullPlanOption
   return out as unknown as FullPlanOptions;
 }
 
-/** The URL query of `options`: only what differs from the defaults. */
-export function toQuery(options: FullPlanOptions): string {
-  const params = new URLSearchParams();
+/** The URL query of `options` (only what differs from the defaults) and the `extra` parameters. */
+export function toQuery(options: FullPlanOptions, extra: [string, string][] = []): string {
+  const params = new URLSearchParams(extra);
   for (const key of keys()) {
     const text = format(key, options[key]);
     if (text !== format(key, DEFAULT_PLAN_OPTIONS[key])) params.set(PARAM[key], text);
@@ -115,21 +115,26 @@ export function toQuery(options: FullPlanOptions): string {
   return query === "" ? "" : `?${query}`;
 }
 
-/** Options at start-up: defaults, then localStorage, then the URL. */
-export function initialOptions(): FullPlanOptions {
-  let stored = { ...DEFAULT_PLAN_OPTIONS };
+/** The query saved in localStorage ("" when none). */
+export function storedQuery(): string {
   try {
-    const text = localStorage.getItem(STORAGE_KEY);
-    if (text !== null) stored = fromQuery(text, stored);
+    return localStorage.getItem(STORAGE_KEY) ?? "";
   } catch {
-    // Storage may be disabled (privacy mode): defaults then.
+    return ""; // Storage may be disabled (privacy mode): defaults then.
   }
-  return fromQuery(location.search, stored);
 }
 
-/** Saves to localStorage and puts the options in the address bar (no reload, no history entry). */
-export function persist(options: FullPlanOptions): void {
-  const query = toQuery(options);
+/** Options at start-up: defaults, then localStorage, then the URL. */
+export function initialOptions(): FullPlanOptions {
+  return fromQuery(location.search, fromQuery(storedQuery(), { ...DEFAULT_PLAN_OPTIONS }));
+}
+
+/**
+ * Saves to localStorage and puts the options in the address bar (no reload, no history entry);
+ * `extra`: further parameters (the strategy and the flank options, flank-options.ts).
+ */
+export function persist(options: FullPlanOptions, extra: [string, string][] = []): void {
+  const query = toQuery(options, extra);
   try {
     localStorage.setItem(STORAGE_KEY, query);
   } catch {

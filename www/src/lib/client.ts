@@ -2,8 +2,8 @@
 // embeds. One promise per request; cancel() (and a trap in the core) replaces the worker and
 // reloads the last part into the new one, so the planner stays usable.
 
-import type { MeshOptions, PlanOptions } from "../core";
-import type { LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
+import type { FlankOptions, MeshOptions, PlanOptions } from "../core";
+import type { FlankResult, LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
 
 /** Rejection reason of requests that were cancelled (by `cancel()` or a newer request). */
 export class CancelledError extends Error {
@@ -75,6 +75,16 @@ export class SlitpathPlanner {
     return this.request<PlanResult>({ type: "plan", id: this.nextId++, options }, [], callbacks.onProgress);
   }
 
+  /**
+   * Plans the loaded part for 5-axis flank milling with a conical tool (seed 002): tool tips,
+   * axes and strip boundaries as typed arrays, the verifier's deviation per vertex of the planned
+   * surface, the report and the program. Needs no slit map (a part whose flattening failed
+   * plans too). Rejects with an Error (readable message) or a CancelledError.
+   */
+  planFlank(options: FlankOptions = {}, callbacks: PlanCallbacks = {}): Promise<FlankResult> {
+    return this.request<FlankResult>({ type: "flank", id: this.nextId++, options }, [], callbacks.onProgress);
+  }
+
   /** E_min of a pole (x, y) of the flattened plane (waits for a running plan). */
   energy(x: number, y: number): Promise<number> {
     return this.request<number>({ type: "energy", id: this.nextId++, x, y });
@@ -135,6 +145,7 @@ export class SlitpathPlanner {
       case "loaded":
         return this.settle(message.id, message.part);
       case "planned":
+      case "flanked":
         return this.settle(message.id, message.plan);
       case "energy":
         return this.settle(message.id, message.value);

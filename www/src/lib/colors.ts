@@ -49,3 +49,32 @@ export function css(c: Rgb, alpha = 1): string {
   const [r, g, b] = c.map((v) => Math.round(v * 255));
   return alpha === 1 ? `rgb(${r} ${g} ${b})` : `rgb(${r} ${g} ${b} / ${alpha})`;
 }
+
+/**
+ * The flank verifier's signed deviation as a fraction of the scale's limit: gouge (negative)
+ * blue → on the surface green → material left (positive) red. Signed, because a gouge scraps the
+ * part while material left can be cut again.
+ */
+const DEVIATION: Rgb[] = [
+  [0.15, 0.2, 0.75],
+  [0.2, 0.6, 0.85],
+  [0.12, 0.55, 0.3],
+  [0.98, 0.85, 0.2],
+  [0.8, 0.1, 0.1],
+];
+
+export function deviationColour(deviation: number, limit: number): Rgb {
+  if (Number.isNaN(deviation)) return UNCOVERED;
+  return ramp(DEVIATION, 0.5 + 0.5 * (deviation / limit));
+}
+
+export function deviationGradientCss(): string {
+  const stops = DEVIATION.map((c, i) => `${css(c)} ${((100 * i) / (DEVIATION.length - 1)).toFixed(0)}%`);
+  return `linear-gradient(to right, ${stops.join(", ")})`;
+}
+
+/** Alternating strip colours of the flank plan's tool axes and tip paths. */
+export const STRIP_COLOURS: Rgb[] = [
+  [0.48, 0.31, 0.82],
+  [0.05, 0.42, 0.55],
+];

@@ -1,6 +1,6 @@
 // The plan options' defaults: the CLI's (`slitpath plan`), so the page writes the same G-code.
 
-import type { PlanOptions } from "../core";
+import type { FlankOptions, PlanOptions, Vec3 } from "../core";
 
 export type FullPlanOptions = Required<Omit<PlanOptions, "partName">>;
 
@@ -23,3 +23,38 @@ export const DEFAULT_PLAN_OPTIONS: Readonly<FullPlanOptions> = Object.freeze({
   optimise: "tpsfo",
   alpha: 10,
 });
+
+/**
+ * The flank options a machinist sets on the page (the rest keep the core's defaults). Defaults:
+ * the core's `FlankOptions::default()`; `strips: null` lets the planner fit as many as the
+ * surface needs.
+ */
+export interface FlankFormOptions {
+  tipRadiusMm: number;
+  topRadiusMm: number;
+  fluteLengthMm: number;
+  direction: Vec3;
+  strips: number | null;
+  weights: "accuracy" | "g1";
+  post: "ac" | "cl";
+  feedMmMin: number;
+  spindleRpm: number;
+}
+
+export const DEFAULT_FLANK_OPTIONS: Readonly<FlankFormOptions> = Object.freeze({
+  tipRadiusMm: 1.5,
+  topRadiusMm: 2.5,
+  fluteLengthMm: 20,
+  direction: [1, 0, 0] as Vec3,
+  strips: null,
+  weights: "accuracy",
+  post: "ac",
+  feedMmMin: 1000,
+  spindleRpm: 12000,
+});
+
+/** The core's options of `form` (an automatic strip count is left out). */
+export function flankOptions(form: FlankFormOptions): FlankOptions {
+  const { strips, ...rest } = form;
+  return strips === null ? { ...rest, direction: [...form.direction] } : { ...rest, direction: [...form.direction], strips };
+}

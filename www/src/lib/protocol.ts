@@ -1,7 +1,8 @@
 // Messages between the main thread (SlitpathPlanner) and the planner worker. Types only.
 
-import type { MeshOptions, MeshReport, PlanOptions, PlanOutput } from "../core";
+import type { FlankOptions, FlankOutput, MeshOptions, MeshReport, PlanOptions, PlanOutput } from "../core";
 import type { Polyline } from "./drawing";
+import type { FlankDrawing } from "./flank-drawing";
 import type { PointGrid } from "./point-grid";
 
 /** A part as loaded by the worker: its report, the surface to draw, and its conformal preview. */
@@ -74,9 +75,19 @@ export interface PlanDrawing {
   rings: Float32Array;
 }
 
+/** A flank plan's outputs plus what the 3D view draws of it (computed in the worker). */
+export interface FlankResult extends FlankOutput {
+  drawing: FlankDrawing;
+  /** Wall time of the plan in the worker, ms. */
+  ms: number;
+  /** The core's linear memory after planning (its peak so far), bytes. */
+  wasmMemoryBytes: number;
+}
+
 export type WorkerRequest =
   | { type: "load"; id: number; name: string; bytes: ArrayBuffer; meshOptions?: MeshOptions }
   | { type: "plan"; id: number; options: PlanOptions }
+  | { type: "flank"; id: number; options: FlankOptions }
   | { type: "energy"; id: number; x: number; y: number }
   | { type: "flatPoint"; id: number; x: number; y: number };
 
@@ -85,6 +96,7 @@ export type WorkerResponse =
   | { type: "loaded"; id: number; part: LoadedPart }
   | { type: "progress"; id: number; stage: string; done: number; total: number }
   | { type: "planned"; id: number; plan: PlanResult }
+  | { type: "flanked"; id: number; plan: FlankResult }
   | { type: "energy"; id: number; value: number }
   | { type: "flatPoint"; id: number; point: [number, number] | null }
   | { type: "error"; id: number | null; message: string; fatal: boolean };

@@ -6,18 +6,22 @@
 // `self` is typed with the DOM lib (the page's tsconfig); postMessage(message, { transfer }) and
 // the "message" event have the same shape on a DedicatedWorkerGlobalScope.
 
-import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, type PlanOutput } from "../core";
+import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, planFlank, type MeshOptions, type PlanOutput } from "../core";
 import { DEFAULT_PLAN_OPTIONS } from "./defaults";
 import { circles, extent, heatColours, loopEdges, pathPolyline, planar, type Polyline } from "./drawing";
+import { flankDrawing } from "./flank-drawing";
 import { PlanarLocator, matchMoves, pathField } from "./geometry";
 import { buildPointGrid } from "./point-grid";
-import type { LoadedPart, PlanDrawing, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
+import type { FlankResult, LoadedPart, PlanDrawing, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
 
 /** The part loaded, what the views and the pole pick need of it, and the last plan's map. */
 let current:
   | {
       part: Part;
       name: string;
+      /** The STL and its mesh options: the flank planner reads the mesh itself. */
+      bytes: Uint8Array;
+      meshOptions: MeshOptions | undefined;
       positions: Float32Array;
       triangles: Uint32Array;
       uv: Float64Array | null;
@@ -57,7 +61,8 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   let offset = 0;
   const TOTAL = 8;
   const progress = (stage: string, done: number) => post({ type: "progress", id: request.id, stage, done: offset + done, total: TOTAL });
-  const part = await Part.open(new Uint8Array(request.bytes), request.meshOptions, progress);
+  const bytes = new Uint8Array(request.bytes);
+  const part = await Part.open(bytes, request.meshOptions, progress);
   current?.part.free();
   current = undefined;
   offset = 2;
@@ -82,6 +87,8 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     part,
     // The G-code header names the part like the CLI does: the file name without its extension.
     name: request.name.replace(/\.[^./\\]*$/, "") || "part",
+    bytes,
+    meshOptions: request.meshOptions,
     positions,
     triangles: triangles.slice(),
     uv,
@@ -166,6 +173,22 @@ function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {
   );
 }
 
+/** A flank plan of the loaded part (seed 002): the core's outputs and the 3D view's arrays. */
+async function flank(request: Extract<WorkerRequest, { type: "flank" }>): Promise<void> {
+  if (current === undefined) throw new Error("no part is loaded");
+  const started = performance.now();
+  const output = await planFlank(current.bytes, current.meshOptions, { ...request.options, partName: current.name }, (stage, done, total) =>
+    // The views' arrays are the last step, after the core's.
+    post({ type: "progress", id: request.id, stage: stage === "done" ? "preparing the views" : stage, done, total: total + 1 }),
+  );
+  const result: FlankResult = { ...output, drawing: flankDrawing(output), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
+  const { tips, axes, stripMoves, positions, triangles, vertexDeviation, drawing: d } = result;
+  post(
+    { type: "flanked", id: request.id, plan: result },
+    buffers(tips, axes, stripMoves, positions, triangles, vertexDeviation, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours),
+  );
+}
+
 /** The flattened-plane point under a slit-domain point (x, y) of the map the 2D view shows. */
 function flatPoint(x: number, y: number): [number, number] | null {
   if (current === undefined || current.uv === null || current.w === null) return null;
@@ -180,6 +203,8 @@ async function handle(request: WorkerRequest): Promise<void> {
         return await load(request);
       case "plan":
         return plan(request);
+      case "flank":
+        return await flank(request);
       case "energy":
         if (current === undefined) throw new Error("no part is loaded");
         return post({ type: "energy", id: request.id, value: current.part.energy(request.x, request.y) });

@@ -30,6 +30,18 @@ export interface PlanView {
   fiveAxis: boolean;
 }
 
+/** What the 3D view draws of a flank plan (arrays transferred from the page): the planned surface coloured by deviation, tips and axes per strip. */
+export interface FlankView {
+  positions: Float32Array;
+  triangles: Uint32Array;
+  normals: Float32Array;
+  heat: Float32Array;
+  axisLines: Float32Array;
+  axisColours: Float32Array;
+  tipLines: Float32Array;
+  tipColours: Float32Array;
+}
+
 export interface Layers {
   heatMap: boolean;
   path: boolean;
@@ -41,6 +53,7 @@ export type RenderRequest =
   | { type: "resize"; view: ViewName; width: number; height: number }
   | { type: "part"; part: PartView }
   | { type: "plan"; id: number; plan: PlanView }
+  | { type: "flank"; id: number; flank: FlankView }
   | { type: "cursor"; index: number }
   | { type: "picked"; pole: Vec2 | null }
   | { type: "layers"; layers: Layers }

@@ -89,6 +89,11 @@ function handle(request: RenderRequest): void {
       views["3d"].setPlan(request.plan);
       views["2d"].setPlan(request.plan);
       return setCursor(0);
+    case "flank":
+      planId = request.id;
+      cursor = { index: -1, askedAt: frame };
+      views["3d"].setFlank(request.flank);
+      return views["2d"].clearPlan();
     case "cursor":
       return setCursor(request.index);
     case "picked":

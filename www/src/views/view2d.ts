@@ -120,6 +120,20 @@ export class View2d {
     this.restale();
   }
 
+  /** Forgets the plan (a flank plan has no slit map): the part's domains and preview again. */
+  clearPlan(): void {
+    if (this.part === null) return;
+    this.plan = null;
+    this.cursor = -1;
+    const { drawing: d } = this.part;
+    this.panes.slit.setDomain(d.previewW, d.outerEdges, d.holeEdges);
+    for (const pane of PANES) {
+      this.panes[pane].setRings(null);
+      this.panes[pane].setPath(null);
+    }
+    this.restale();
+  }
+
   /** The pole picked by hand (flattened plane), or null for an automatic origin. */
   setPicked(pole: [number, number] | null): void {
     this.picked = pole;

@@ -17,7 +17,7 @@ import { drawIn, type Rect } from "./dirty-rects";
 import type { ElementProxy } from "./element-proxy";
 import { dispose, polylineObject } from "./objects";
 import { readPixels } from "./read-pixels";
-import type { Layers, PartView, PlanView } from "./render-protocol";
+import type { FlankView, Layers, PartView, PlanView } from "./render-protocol";
 
 export class View3d {
   private readonly renderer: THREE.WebGLRenderer;
@@ -33,6 +33,11 @@ export class View3d {
   /** The decimated path (also the far level of `path`): the hover picks on it. */
   private pathCoarse: THREE.LineSegments | null = null;
   private needles: THREE.LineSegments | null = null;
+  /**
+   * A flank plan: its own surface (the planner's mesh, coloured by deviation) in place of the
+   * part's, the tips' paths and the tool axes per strip.
+   */
+  private flank: { surface: THREE.Mesh<THREE.BufferGeometry, THREE.MeshStandardMaterial>; heat: Float32Array; plain: Float32Array; tips: THREE.LineSegments; axes: THREE.LineSegments } | null = null;
   private readonly tool = new THREE.Group();
   /** The tool's own scene (drawn over the layer), with lights like the part's. */
   private readonly toolScene = new THREE.Scene();
@@ -43,6 +48,8 @@ export class View3d {
   private toolRect: Rect | null | undefined = undefined;
   private plan: PlanView | null = null;
   private cursor = -1;
+  /** Where the camera looks from when fitting (a unit vector from the part's centre). */
+  private fitDirection = DEFAULT_VIEW.clone();
   /** Camera distance of the last fit: the full path is drawn nearer than half of it. */
   private fitDistance = 1;
   private layers: Layers = { heatMap: true, path: true, needles: true };
@@ -92,6 +99,7 @@ export class View3d {
   /** Shows a newly loaded part (and forgets the previous plan). */
   setPart(part: PartView): void {
     this.clear();
+    this.fitDirection = DEFAULT_VIEW.clone();
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(part.positions, 3));
     geometry.setIndex(new THREE.BufferAttribute(part.triangles, 1));
@@ -119,6 +127,7 @@ export class View3d {
 
   /** Shows a plan of the current part: heat map, path, needles, tool. */
   setPlan(plan: PlanView): void {
+    this.dropFlank();
     this.plan = plan;
     dispose(this.path);
     dispose(this.needles);
@@ -130,6 +139,48 @@ export class View3d {
     this.applyLayers();
     this.setCursor(0);
     this.invalidate(true);
+  }
+
+  /** Shows a flank plan (and forgets a spiral plan): no tool to scrub, nothing to hover. */
+  setFlank(view: FlankView): void {
+    this.dropFlank();
+    this.plan = null;
+    this.cursor = -1;
+    this.tool.visible = false;
+    dispose(this.path);
+    dispose(this.needles);
+    this.path = this.pathCoarse = this.needles = null;
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(view.positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(view.triangles, 1));
+    geometry.setAttribute("normal", new THREE.BufferAttribute(view.normals, 3));
+    const plain = new Float32Array(view.heat.length);
+    for (let i = 0; i < plain.length; i += 3) plain.set(SURFACE, i);
+    geometry.setAttribute("color", new THREE.BufferAttribute(view.heat.slice(), 3));
+    const material = new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.65, metalness: 0.05, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 });
+    const lines = (positions: Float32Array, colours: Float32Array) => {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute("position", new THREE.BufferAttribute(positions, 3));
+      g.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+      return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ vertexColors: true }));
+    };
+    this.flank = { surface: new THREE.Mesh(geometry, material), heat: view.heat, plain, tips: lines(view.tipLines, view.tipColours), axes: lines(view.axisLines, view.axisColours) };
+    this.content.add(this.flank.surface, this.flank.tips, this.flank.axes);
+    if (this.surface) this.surface.visible = false;
+    this.applyLayers();
+    // A flank tool works beside a wall, often away from +Z: look from the side the surface
+    // faces (its normals point to the tool), a little from above.
+    const facing = new THREE.Vector3();
+    for (let i = 0; i < view.normals.length; i += 3) facing.add(new THREE.Vector3(view.normals[i], view.normals[i + 1], view.normals[i + 2]));
+    if (facing.length() > 0.2 * (view.normals.length / 3)) this.fit(facing.normalize().add(new THREE.Vector3(0.25, -0.35, 0.45)).normalize());
+  }
+
+  /** Removes a flank plan's objects and shows the part's surface again. */
+  private dropFlank(): void {
+    if (this.flank === null) return;
+    for (const object of [this.flank.surface, this.flank.tips, this.flank.axes]) dispose(object);
+    this.flank = null;
+    if (this.surface) this.surface.visible = true;
   }
 
   setLayers(layers: Layers): void {
@@ -152,14 +203,14 @@ export class View3d {
     this.invalidate();
   }
 
-  /** Frames the whole part. */
-  fit(): void {
+  /** Frames the whole part, seen from `direction` (kept for the Fit button). */
+  fit(direction = this.fitDirection): void {
+    this.fitDirection = direction;
     const geometry = this.surface?.geometry;
     if (geometry === undefined) return this.invalidate();
     if (geometry.boundingBox === null) geometry.computeBoundingBox();
     const sphere = geometry.boundingBox!.getBoundingSphere(new THREE.Sphere());
     const distance = (sphere.radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2))) * 1.05;
-    const direction = new THREE.Vector3(0.55, -1, 0.85).normalize();
     this.camera.position.copy(sphere.center).addScaledVector(direction, distance);
     this.camera.near = distance / 100;
     this.camera.far = distance * 100;
@@ -317,6 +368,13 @@ export class View3d {
 
   private applyLayers(): void {
     this.paintHeat();
+    if (this.flank) {
+      const colours = this.flank.surface.geometry.getAttribute("color") as THREE.BufferAttribute;
+      (colours.array as Float32Array).set(this.layers.heatMap ? this.flank.heat : this.flank.plain);
+      colours.needsUpdate = true;
+      this.flank.tips.visible = this.layers.path;
+      this.flank.axes.visible = this.layers.needles;
+    }
     if (this.path) this.path.visible = this.layers.path;
     if (this.needles) this.needles.visible = this.layers.needles;
     this.invalidate(true);
@@ -328,9 +386,13 @@ export class View3d {
     this.tool.visible = false;
     for (const child of [...this.content.children]) dispose(child);
     this.surface = this.path = this.needles = this.pathCoarse = null;
+    this.flank = null;
     this.colours = this.plainColours = null;
   }
 }
+
+/** The camera's direction from the part when fitting (machine convention: from the front right, above). */
+const DEFAULT_VIEW = new THREE.Vector3(0.55, -1, 0.85).normalize();
 
 /** The light that follows the camera, in the camera's frame. */
 const SUN = new THREE.Vector3(1, -2, 3);

@@ -3,9 +3,9 @@
 // panes' titles and where each frame drew the cursor (data-frame and data-cursor on the canvases,
 // which the tests read with the pixels they ask for).
 
-import type { LoadedPart, PlanResult, Vec2 } from "../lib/index";
+import type { FlankResult, LoadedPart, PlanResult, Vec2 } from "../lib/index";
 import type { ForwardedEvent } from "./element-proxy";
-import type { Layers, PartView, PlanView, RenderRequest, RenderResponse, ViewName } from "./render-protocol";
+import type { FlankView, Layers, PartView, PlanView, RenderRequest, RenderResponse, ViewName } from "./render-protocol";
 
 const FORWARDED = ["pointerdown", "pointermove", "pointerup", "pointercancel", "wheel", "contextmenu", "click"] as const;
 
@@ -56,6 +56,19 @@ export class Views {
     const polylines = [d.path, d.pathCoarse, d.flatPath, d.slitPath].flatMap((p) => [p.positions, p.colours, p.segments, p.points]);
     const grids = [d.flatGrid, d.slitGrid].flatMap((g) => [g.starts, g.order]);
     this.send({ type: "plan", id, plan: view }, buffers(pathContacts, pathTips, pathAxes, moveOfPoint, pathUv, pathW, d.heat, d.w, d.rings, ...polylines, ...grids));
+    return drawn;
+  }
+
+  /**
+   * Shows a flank plan (the 3D view only: the slit map has no part in it); resolves once a frame
+   * shows it. The arrays drawn are transferred to the render worker (left empty here).
+   */
+  setFlank(plan: FlankResult): Promise<void> {
+    const id = this.nextId++;
+    const drawn = new Promise<void>((resolve) => this.drawing.set(id, resolve));
+    const { positions, triangles, drawing: d } = plan;
+    const flank: FlankView = { positions, triangles, normals: d.normals, heat: d.heat, axisLines: d.axisLines, axisColours: d.axisColours, tipLines: d.tipLines, tipColours: d.tipColours };
+    this.send({ type: "flank", id, flank }, buffers(positions, triangles, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours));
     return drawn;
   }
 

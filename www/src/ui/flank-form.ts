@@ -1,0 +1,120 @@
+// The flank options form (strategy "flank"): the conical tool, the machining direction, the
+// strips, the priority (the CLI's weights presets), the post, feed and spindle. Inputs have the
+// data-testid `opt-flank-<name>`; a field that does not parse is marked and reported instead of
+// planned. Values the core refuses (a negative radius, a zero flute) reach it: its message
+// names the option.
+
+import type { FlankFormOptions } from "../lib/defaults";
+import { formatFlank, parseFlank } from "../flank-options";
+import { el } from "./dom";
+
+type Key = keyof FlankFormOptions;
+
+interface Field {
+  key: Key;
+  id: string;
+  label: string;
+  unit?: string;
+  placeholder?: string;
+  hint?: string;
+  choices?: [string, string][];
+}
+
+const TOOL: Field[] = [
+  { key: "tipRadiusMm", id: "tip", label: "Tip radius", unit: "mm" },
+  { key: "topRadiusMm", id: "top", label: "Top radius", unit: "mm" },
+  { key: "fluteLengthMm", id: "flute", label: "Flute length", unit: "mm" },
+];
+const PATH: Field[] = [
+  { key: "direction", id: "direction", label: "Direction X,Y,Z", hint: "the strips run along it; the shank points along n × direction" },
+  { key: "strips", id: "strips", label: "Strips", placeholder: "auto" },
+  {
+    key: "weights",
+    id: "priority",
+    label: "Priority",
+    choices: [
+      ["accuracy", "accuracy (w₂ = 1, w₃ = 10⁻³)"],
+      ["g1", "G¹ strip boundaries (w₂ = 10⁻⁴, w₃ = 1)"],
+    ],
+  },
+];
+const MACHINE: Field[] = [
+  { key: "post", id: "post", label: "Post", choices: [["ac", "5-axis AC table-table (TCP)"], ["cl", "CL data (APT)"]] },
+  { key: "feedMmMin", id: "feed", label: "Feed", unit: "mm/min" },
+  { key: "spindleRpm", id: "spindle", label: "Spindle", unit: "rpm" },
+];
+
+export class FlankForm {
+  private readonly inputs = new Map<Key, HTMLInputElement | HTMLSelectElement>();
+
+  /** Called with valid options after every edit. */
+  onChange: (options: FlankFormOptions) => void = () => {};
+  /** Called with a message when a field does not parse. */
+  onInvalid: (message: string) => void = () => {};
+
+  constructor(container: HTMLElement, private current: FlankFormOptions) {
+    container.replaceChildren(
+      this.group("Conical tool", TOOL),
+      this.group("Strips", PATH),
+      this.group("Machine", MACHINE),
+    );
+    this.set(current);
+    container.addEventListener("change", () => this.edited());
+    container.addEventListener("input", (event) => {
+      if (event.target instanceof HTMLInputElement) this.edited();
+    });
+  }
+
+  private group(title: string, fields: Field[]): HTMLElement {
+    const box = el("fieldset", { className: "options" }, el("legend", { text: title }));
+    for (const field of fields) box.append(this.row(field));
+    return box;
+  }
+
+  private row(field: Field): HTMLElement {
+    let input: HTMLInputElement | HTMLSelectElement;
+    if (field.choices) {
+      input = el("select");
+      for (const [value, text] of field.choices) input.append(new Option(text, value));
+    } else {
+      input = el("input");
+      input.type = "text";
+      input.inputMode = field.key === "direction" ? "text" : "decimal";
+      input.autocomplete = "off";
+      if (field.placeholder) input.placeholder = field.placeholder;
+    }
+    input.id = `opt-flank-${field.id}`;
+    input.dataset["testid"] = `opt-flank-${field.id}`;
+    if (field.hint) input.title = field.hint;
+    this.inputs.set(field.key, input);
+    const unit = field.unit ? el("span", { text: field.unit, className: "unit" }) : "";
+    return el("label", { className: "field" }, el("span", { text: field.label }), input, unit);
+  }
+
+  /** Shows `options` in the inputs (without calling onChange). */
+  set(options: FlankFormOptions): void {
+    this.current = options;
+    for (const [key, input] of this.inputs) {
+      input.value = formatFlank(key, options[key]);
+      input.removeAttribute("aria-invalid");
+    }
+  }
+
+  private edited(): void {
+    const out: Record<string, unknown> = { ...this.current };
+    const bad: string[] = [];
+    for (const [key, input] of this.inputs) {
+      const value = parseFlank(key, input.value.trim());
+      if (value === undefined) {
+        input.setAttribute("aria-invalid", "true");
+        bad.push(input.closest("label")?.firstChild?.textContent ?? key);
+      } else {
+        input.removeAttribute("aria-invalid");
+        out[key] = value;
+      }
+    }
+    if (bad.length > 0) return this.onInvalid(`${bad.join(", ")}: enter ${bad.length === 1 ? "a valid value" : "valid values"} (numbers; direction as X,Y,Z; strips a whole number or empty)`);
+    this.current = out as unknown as FlankFormOptions;
+    this.onChange(this.current);
+  }
+}
