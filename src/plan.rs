@@ -12,6 +12,7 @@
 
 use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenReport, Flattening};
 use crate::gcode::{self, GcodeError, GcodeOptions, Post};
+use crate::mesh::creases::FacetValleys;
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
@@ -885,6 +886,13 @@ pub struct PlanReport {
     pub verify: Option<Verification>,
     pub gouge_risk_area_mm2: f64,
     pub flipped_triangles: usize,
+    /// With [`Facets::Exact`]: the concave creases where the STL's facets alone leave more than
+    /// h for this R, whatever the path ([`crate::mesh::creases`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub facet_valleys: Option<FacetValleys>,
+    /// What the user should know before trusting the G-code, in words (the CLI prints them on
+    /// stderr, the page beside the figures).
+    pub warnings: Vec<String>,
     pub timings_ms: Timings,
 }
 
@@ -904,7 +912,7 @@ impl PlanReport {
             Mode::Disk => ("disk", None, None),
             Mode::Annulus { hole, inner_radius } => ("annulus", Some(hole), Some(inner_radius)),
         };
-        Self {
+        let mut report = Self {
             options: OptionsReport::new(options),
             mesh: planner.report.clone(),
             flatten: planner.flattening.report(),
@@ -930,8 +938,26 @@ impl PlanReport {
             verify: verification,
             gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,
             flipped_triangles: map.flipped_triangles(),
+            facet_valleys: None,
+            warnings: Vec::new(),
             timings_ms,
+        };
+        if options.facets == Facets::Exact {
+            let (r, h) = (options.radius_mm, options.scallop_mm);
+            let valleys = crate::mesh::creases::facet_valleys(&planner.surface, r, h);
+            if valleys.edges > 0 || valleys.pits > 0 {
+                report.warnings.push(format!(
+                    "the STL's facets alone leave up to {:.4} mm ({:.2} h) at {} concave creases ({:.1} mm of edges) and {} pits for a ball of radius {r} mm, whatever the path: if the STL tessellates a smooth surface, plan with --facets smooth; otherwise use a finer STL or a smaller ball (a smaller h would not help)",
+                    valleys.max_depth_mm,
+                    valleys.max_depth_mm / h,
+                    valleys.edges,
+                    valleys.length_mm,
+                    valleys.pits
+                ));
+            }
+            report.facet_valleys = Some(valleys);
         }
+        report
     }
 }
 

@@ -59,13 +59,6 @@ fn skinny_tilted_panel_with_six_holes_flattens() {
 /// The seeds of the sweep (3k–8k faces): the first twelve.
 const SWEEP_SEEDS: std::ops::Range<u64> = 0..12;
 
-/// Seeds of the sweep that plan but whose verified max scallop is over the limit (1.056 h and
-/// 1.968 h; their p99 is under h). Not the flattening (the conformal path without seed 003's
-/// optimisation peaks as high, and `cargo bench --bench sweep` finds such peaks on 23 of 200
-/// parts, four of them without holes): local peaks of the spacing on coarse staircase parts,
-/// left for a follow-up. They must still plan, and not get worse.
-const KNOWN_OVER_H: [(u64, f64); 2] = [(3, 1.1), (6, 2.1)];
-
 #[test]
 fn generated_parts_plan_within_the_scallop_limit() {
     let mut failures = Vec::new();
@@ -74,13 +67,14 @@ fn generated_parts_plan_within_the_scallop_limit() {
         match run_sweep(&part, 50_000, &|| 0.0) {
             Ok(row) => {
                 println!("{}: {:?}, {}", row.name, row.flatten.method, row.finish());
-                let known = KNOWN_OVER_H.iter().find(|k| k.0 == seed);
-                let ok = match known {
-                    Some(&(_, bound)) => row.max_over_h <= bound && row.uncovered_fraction <= 1e-3 && row.gouges == 0,
-                    None => row.within_limits(),
-                };
-                if !ok {
+                // Seed 6 peaks at 1.67 h in the valleys its facets alone leave (2.04 h deep): the
+                // plan warns of them, and `within_limits` accepts that.
+                if !row.within_limits() {
                     failures.push(format!("{}: {}", row.name, row.finish()));
+                }
+                // Whatever the facets leave over h, the user was told before trusting the file.
+                if row.max_outside_valleys_over_h < row.max_over_h && row.max_over_h > 1.02 {
+                    assert!(row.facet_depth_over_h > 1.0, "{}: {}", row.name, row.finish());
                 }
                 assert_eq!(row.flatten.quality.flipped_triangles, 0);
             }

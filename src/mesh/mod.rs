@@ -29,6 +29,7 @@
 //!
 //! Bad input never panics: every fault is a [`MeshError`] that names it.
 
+pub mod creases;
 pub mod extract;
 pub mod geometry;
 pub mod nearest;

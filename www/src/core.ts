@@ -165,6 +165,10 @@ export interface PlanReport {
     max_ct: number;
   };
   gouge_risk_area_mm2: number;
+  /** With exact facets: the concave creases and pits where the facets alone leave more than h. */
+  facet_valleys?: { edges: number; length_mm: number; max_depth_mm: number; pits: number };
+  /** What to know before trusting the G-code, in words (e.g. facets too coarse for this h). */
+  warnings: string[];
   /**
    * Rings the spacing could not prove everywhere: at P1 folds by slit tips, at concave creases
    * sharper than the ball, and where the gate still found a point of the band uncut.

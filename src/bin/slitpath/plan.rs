@@ -114,6 +114,9 @@ pub fn run(part: &Path, mesh_options: &MeshOptions, options: &PlanOptions) -> Re
     let mut plan = planner.plan(options, &mut |_, _, _| {}, &now).map_err(|e| format!("{name}: {e}"))?;
     plan.report.timings_ms.read = t_read;
     plan.report.timings_ms.total += t_read;
+    for warning in &plan.report.warnings {
+        eprintln!("warning: {name}: {warning}");
+    }
     let json = serde_json::to_string_pretty(&plan.report).map_err(|e| e.to_string())?;
     Ok((plan.gcode, json))
 }

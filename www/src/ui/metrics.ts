@@ -104,6 +104,7 @@ export function renderMetrics(container: HTMLElement, plan: PlanResult, limit: n
   const total = plan.report.timings_ms["total"] ?? plan.ms;
   const mib = plan.wasmMemoryBytes / 2 ** 20;
   container.replaceChildren(
+    ...plan.report.warnings.map((text) => el("p", { className: "plan-warning", testId: "plan-warning", text: `⚠ ${text}` })),
     table,
     el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(total)}` }),
     // Linear memory never shrinks: this is the planner's peak so far (big parts need watching).
