@@ -338,6 +338,9 @@ export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | unde
       positions: plan.positions(),
       triangles: plan.triangles(),
       vertexDeviation: plan.vertexDeviation(),
+      contactPoints: plan.contactPoints(),
+      contactSamples: plan.contactSamples(),
+      posesPerStrip: plan.posesPerStrip(),
     };
   } finally {
     plan.free();

@@ -181,4 +181,9 @@ export interface FlankOutput {
   triangles: Uint32Array;
   /** The verifier's deviation per surface vertex, mm (positive: material left; NaN: uncovered). */
   vertexDeviation: Float64Array;
+  /** The envelope's contact curves (seed 002 eqs. 5–6): `contactSamples` xyz points per optimised pose, strip after strip; NaN where the envelope is not real. */
+  contactPoints: Float64Array;
+  contactSamples: number;
+  /** Optimised poses per strip (the contact curves' grouping). */
+  posesPerStrip: Uint32Array;
 }

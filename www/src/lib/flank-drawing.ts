@@ -1,6 +1,7 @@
 // The 3D view's arrays of a flank plan, built in the planner worker: the planned surface with
 // its normals and the verifier's deviation as colours, and per strip the tool tips' path and the
-// tool axes (the flute from the tip up), decimated so a long program draws as fast as a short one.
+// tool axes (the flute from the tip up) and the envelope's contact curves, decimated so a long
+// program draws as fast as a short one.
 
 import { STRIP_COLOURS, deviationColour } from "./colors";
 import type { FlankOutput } from "../core";
@@ -19,6 +20,9 @@ export interface FlankDrawing {
   /** The tips' path of every strip as line segments (xyz pairs), a colour per vertex. */
   tipLines: Float32Array;
   tipColours: Float32Array;
+  /** The contact curves (where the cone touches the surface) of every drawn pose, as line segments, a colour per vertex. */
+  envelopeLines: Float32Array;
+  envelopeColours: Float32Array;
 }
 
 /** At most this many tool axes per strip are drawn: more only darken the view. */
@@ -76,6 +80,24 @@ export function flankDrawing(plan: FlankOutput): FlankDrawing {
       }
     }
   }
+  const envelope: number[] = [];
+  const envelopeColours: number[] = [];
+  const [k, c] = [plan.contactSamples, plan.contactPoints];
+  let pose = 0;
+  plan.posesPerStrip.forEach((poses, s) => {
+    // The strip's colour, lighter: the contact curves lie on the surface, under the tips' path.
+    const colour = STRIP_COLOURS[s % STRIP_COLOURS.length]!.map((x) => 0.5 + 0.5 * x);
+    const step = Math.max(1, Math.ceil(poses / AXES_PER_STRIP));
+    for (let p = 0; p < poses; p++, pose++) {
+      if (p % step !== 0 && p !== poses - 1) continue;
+      for (let j = 0; j + 1 < k; j++) {
+        const [a, b] = [3 * (pose * k + j), 3 * (pose * k + j + 1)];
+        if (!Number.isFinite(c[a]!) || !Number.isFinite(c[b]!)) continue;
+        envelope.push(c[a]!, c[a + 1]!, c[a + 2]!, c[b]!, c[b + 1]!, c[b + 2]!);
+        envelopeColours.push(...colour, ...colour);
+      }
+    }
+  });
   return {
     normals: vertexNormals(plan.positions, plan.triangles),
     heat,
@@ -84,5 +106,7 @@ export function flankDrawing(plan: FlankOutput): FlankDrawing {
     axisColours: new Float32Array(axisColours),
     tipLines: new Float32Array(tips),
     tipColours: new Float32Array(tipColours),
+    envelopeLines: new Float32Array(envelope),
+    envelopeColours: new Float32Array(envelopeColours),
   };
 }

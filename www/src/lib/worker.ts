@@ -185,7 +185,7 @@ async function flank(request: Extract<WorkerRequest, { type: "flank" }>): Promis
   const { tips, axes, stripMoves, positions, triangles, vertexDeviation, drawing: d } = result;
   post(
     { type: "flanked", id: request.id, plan: result },
-    buffers(tips, axes, stripMoves, positions, triangles, vertexDeviation, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours),
+    buffers(tips, axes, stripMoves, positions, triangles, vertexDeviation, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours, d.envelopeLines, d.envelopeColours, result.contactPoints, result.posesPerStrip),
   );
 }
 

@@ -30,7 +30,7 @@ export interface PlanView {
   fiveAxis: boolean;
 }
 
-/** What the 3D view draws of a flank plan (arrays transferred from the page): the planned surface coloured by deviation, tips and axes per strip. */
+/** What the 3D view draws of a flank plan (arrays transferred from the page): the planned surface coloured by deviation, tips, axes and contact curves per strip. */
 export interface FlankView {
   positions: Float32Array;
   triangles: Uint32Array;
@@ -40,6 +40,8 @@ export interface FlankView {
   axisColours: Float32Array;
   tipLines: Float32Array;
   tipColours: Float32Array;
+  envelopeLines: Float32Array;
+  envelopeColours: Float32Array;
 }
 
 export interface Layers {

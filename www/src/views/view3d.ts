@@ -37,7 +37,7 @@ export class View3d {
    * A flank plan: its own surface (the planner's mesh, coloured by deviation) in place of the
    * part's, the tips' paths and the tool axes per strip.
    */
-  private flank: { surface: THREE.Mesh<THREE.BufferGeometry, THREE.MeshStandardMaterial>; heat: Float32Array; plain: Float32Array; tips: THREE.LineSegments; axes: THREE.LineSegments } | null = null;
+  private flank: { surface: THREE.Mesh<THREE.BufferGeometry, THREE.MeshStandardMaterial>; heat: Float32Array; plain: Float32Array; tips: THREE.LineSegments; axes: THREE.LineSegments; envelopes: THREE.LineSegments } | null = null;
   private readonly tool = new THREE.Group();
   /** The tool's own scene (drawn over the layer), with lights like the part's. */
   private readonly toolScene = new THREE.Scene();
@@ -164,8 +164,8 @@ export class View3d {
       g.setAttribute("color", new THREE.BufferAttribute(colours, 3));
       return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ vertexColors: true }));
     };
-    this.flank = { surface: new THREE.Mesh(geometry, material), heat: view.heat, plain, tips: lines(view.tipLines, view.tipColours), axes: lines(view.axisLines, view.axisColours) };
-    this.content.add(this.flank.surface, this.flank.tips, this.flank.axes);
+    this.flank = { surface: new THREE.Mesh(geometry, material), heat: view.heat, plain, tips: lines(view.tipLines, view.tipColours), axes: lines(view.axisLines, view.axisColours), envelopes: lines(view.envelopeLines, view.envelopeColours) };
+    this.content.add(this.flank.surface, this.flank.tips, this.flank.axes, this.flank.envelopes);
     if (this.surface) this.surface.visible = false;
     this.applyLayers();
     // A flank tool works beside a wall, often away from +Z: look from the side the surface
@@ -178,7 +178,7 @@ export class View3d {
   /** Removes a flank plan's objects and shows the part's surface again. */
   private dropFlank(): void {
     if (this.flank === null) return;
-    for (const object of [this.flank.surface, this.flank.tips, this.flank.axes]) dispose(object);
+    for (const object of [this.flank.surface, this.flank.tips, this.flank.axes, this.flank.envelopes]) dispose(object);
     this.flank = null;
     if (this.surface) this.surface.visible = true;
   }
@@ -373,6 +373,7 @@ export class View3d {
       (colours.array as Float32Array).set(this.layers.heatMap ? this.flank.heat : this.flank.plain);
       colours.needsUpdate = true;
       this.flank.tips.visible = this.layers.path;
+      this.flank.envelopes.visible = this.layers.path;
       this.flank.axes.visible = this.layers.needles;
     }
     if (this.path) this.path.visible = this.layers.path;

@@ -67,8 +67,8 @@ export class Views {
     const id = this.nextId++;
     const drawn = new Promise<void>((resolve) => this.drawing.set(id, resolve));
     const { positions, triangles, drawing: d } = plan;
-    const flank: FlankView = { positions, triangles, normals: d.normals, heat: d.heat, axisLines: d.axisLines, axisColours: d.axisColours, tipLines: d.tipLines, tipColours: d.tipColours };
-    this.send({ type: "flank", id, flank }, buffers(positions, triangles, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours));
+    const flank: FlankView = { positions, triangles, normals: d.normals, heat: d.heat, axisLines: d.axisLines, axisColours: d.axisColours, tipLines: d.tipLines, tipColours: d.tipColours, envelopeLines: d.envelopeLines, envelopeColours: d.envelopeColours };
+    this.send({ type: "flank", id, flank }, buffers(positions, triangles, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours, d.envelopeLines, d.envelopeColours));
     return drawn;
   }
 
