@@ -22,7 +22,7 @@ const CASES = [
   { name: "40k panel", fixture: "panel:0.75", scallop: 0.01, replans: 10 },
   { name: "300k panel", fixture: "panel:0.275", scallop: 0.02 },
 ];
-const STAGES = ["flatten", "slitmap", "origin", "spacing", "spiral", "toolpath", "verify", "post", "total"];
+const STAGES = ["flatten", "slitmap", "origin", "optimise", "spacing", "spiral", "toolpath", "verify", "post", "total"];
 const TIMEOUT_MS = Number(process.env.SLITPATH_BENCH_PAGE_TIMEOUT ?? 300_000);
 const only = process.env.SLITPATH_BENCH_PAGE ?? "";
 
