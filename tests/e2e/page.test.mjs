@@ -100,6 +100,20 @@ describe("the planner page", { concurrency: false }, () => {
     assert.equal(await page.getByTestId("opt-scallop").inputValue(), "0.08");
   });
 
+  it("warns when the STL's facets alone leave more than h, and not otherwise (issue 34)", async () => {
+    // A six-hole panel meshed at 3 mm: its concave creases and pits alone leave about 5.7 µm
+    // for R 3, whatever the path.
+    const file = join(output, "coarse_panel.stl");
+    cli("fixture", "panel:3", "-o", file);
+    assert.equal(await replan(() => page.getByTestId("stl-input").setInputFiles(file)), "planned");
+    assert.equal(await page.getByTestId("plan-warning").count(), 0, "no warning at h = 0.08 mm");
+    assert.equal(await replan(() => page.getByTestId("opt-scallop").fill("0.004")), "planned");
+    const warning = await page.getByTestId("plan-warning").textContent();
+    assert.match(warning, /facets alone leave .* --facets smooth/);
+    assert.equal(await replan(() => page.getByTestId("opt-scallop").fill("0.08")), "planned");
+    assert.equal(await page.getByTestId("plan-warning").count(), 0, "gone again at h = 0.08 mm");
+  });
+
   it("plans an uploaded STL (a fixture written by the CLI)", async () => {
     const file = join(output, "plate_3_holes.stl");
     cli("fixture", "plate_3_holes", "-o", file);
