@@ -30,11 +30,13 @@ fn main() {
         println!("planned-everywhere sweep, native: {count} generated parts, {faces:?} faces");
         let mut failures: BTreeMap<&str, Vec<String>> = BTreeMap::new();
         let (mut planned, mut methods) = (0, BTreeMap::new());
+        let mut lengths = Vec::new();
         for seed in 0..count {
             let part = generated::part(seed, faces.clone());
             match run_sweep(&part, 100_000, &now) {
                 Ok(row) => {
                     println!("{}", format_sweep(&row));
+                    lengths.push(row.length_over_ideal);
                     *methods.entry(format!("{:?}", row.flatten.method)).or_insert(0) += 1;
                     if row.within_limits() {
                         planned += 1;
@@ -50,6 +52,11 @@ fn main() {
         }
         let failed: usize = failures.values().map(Vec::len).sum();
         println!("{planned} planned within the limits, {failed} failed; flattening methods {methods:?}");
+        lengths.sort_by(f64::total_cmp);
+        if !lengths.is_empty() {
+            let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
+            println!("length / ideal: median {:.4}, mean {:.4}", lengths[lengths.len() / 2], mean);
+        }
         for (stage, list) in &failures {
             println!("  {stage}: {}", list.len());
             for f in list {

@@ -568,6 +568,8 @@ pub struct SweepFigures {
     pub facet_depth_over_h: f64,
     pub uncovered_fraction: f64,
     pub gouges: usize,
+    /// The path's length over the ideal (area / stepover of a flat plate at h).
+    pub length_over_ideal: f64,
     pub plan_ms: f64,
 }
 
@@ -635,6 +637,7 @@ pub fn run_sweep(
         facet_depth_over_h: plan.report.facet_valleys.as_ref().map_or(0.0, |f| f.max_depth_mm / h),
         uncovered_fraction: v.uncovered_fraction,
         gouges: v.gouges,
+        length_over_ideal: plan.report.path.length_over_ideal,
         plan_ms: now() - t0,
     };
     Ok(figures)
@@ -642,7 +645,7 @@ pub fn run_sweep(
 
 pub fn format_sweep(f: &SweepFigures) -> String {
     format!(
-        "{:<42} {:>6} {:<10} qc {:.4}/{:<7.3} max {:.3} h  facets {:.3} h  {:>6.0} ms",
+        "{:<42} {:>6} {:<10} qc {:.4}/{:<7.3} max {:.3} h  facets {:.3} h  length {:.3} ideal  {:>6.0} ms",
         f.name,
         f.faces,
         format!("{:?}", f.flatten.method),
@@ -650,6 +653,7 @@ pub fn format_sweep(f: &SweepFigures) -> String {
         f.flatten.quality.qc_max,
         f.max_over_h,
         f.facet_depth_over_h,
+        f.length_over_ideal,
         f.plan_ms
     )
 }

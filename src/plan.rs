@@ -860,6 +860,60 @@ pub struct OriginReport {
     pub rejected: Vec<RejectedPole>,
 }
 
+/// Where a peak of the verified finish lies: the verifier's sample ([`verify::ScallopAt`]), its
+/// slit-domain image w = ρ·e^{iθ} and the rings either side of it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PeakAt {
+    pub scallop_mm: f64,
+    pub position: [f64; 3],
+    pub face: u32,
+    pub in_valley: bool,
+    /// |w| and arg w of the sample's image.
+    pub rho: f64,
+    pub theta: f64,
+    /// The ring outside the sample (larger radius) and the one inside it, indices into
+    /// `ring_radii` (`None` beyond the first or the last ring).
+    pub ring_outside: Option<usize>,
+    pub ring_inside: Option<usize>,
+}
+
+impl PeakAt {
+    /// The peak `at` located on `surface` (the map's vertices) in `map` between `radii`
+    /// (outermost first); `None` when its face is not the surface's.
+    pub fn locate(at: &verify::ScallopAt, surface: &Surface, map: &SlitMap, radii: &[f64]) -> Option<Self> {
+        let [a, b, c] = *surface.triangles.get(at.face as usize)?;
+        let corner = |v: u32| surface.positions.get(v as usize).copied();
+        let (pa, pb, pc) = (corner(a)?, corner(b)?, corner(c)?);
+        let w = |v: u32| map.w.get(v as usize).copied();
+        let (wa, wb, wc) = (w(a)?, w(b)?, w(c)?);
+        // Barycentric coordinates of the sample (it lies on the face).
+        let p = DVec3::from_array(at.position);
+        let (e0, e1, e2) = (pb - pa, pc - pa, p - pa);
+        let (d00, d01, d11, d20, d21) = (e0.dot(e0), e0.dot(e1), e1.dot(e1), e2.dot(e0), e2.dot(e1));
+        let den = d00 * d11 - d01 * d01;
+        let (v, u) =
+            if den > 0.0 { ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den) } else { (0.0, 0.0) };
+        let image = wa * (1.0 - v - u) + wb * v + wc * u;
+        let rho = image.length();
+        let inside = radii.iter().position(|&r| r <= rho);
+        let outside = match inside {
+            Some(0) => None,
+            Some(k) => Some(k - 1),
+            None => radii.len().checked_sub(1),
+        };
+        Some(Self {
+            scallop_mm: at.scallop_mm,
+            position: at.position,
+            face: at.face,
+            in_valley: at.in_valley,
+            rho,
+            theta: image.y.atan2(image.x),
+            ring_outside: outside,
+            ring_inside: inside,
+        })
+    }
+}
+
 /// The plan report (`slitpath plan --report`, and what the page shows).
 #[derive(Debug, Clone, Serialize)]
 pub struct PlanReport {
@@ -884,6 +938,13 @@ pub struct PlanReport {
     pub path: PathSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verify: Option<Verification>,
+    /// Where the verifier's largest scallop lies in the slit domain and between which rings
+    /// (absent without verification).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_scallop_at: Option<PeakAt>,
+    /// The same for its largest scallop outside the facet valleys.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_outside_valleys_at: Option<PeakAt>,
     pub gouge_risk_area_mm2: f64,
     pub flipped_triangles: usize,
     /// With [`Facets::Exact`]: the concave creases where the STL's facets alone leave more than
@@ -935,6 +996,8 @@ impl PlanReport {
             gate_compromises: rings.gate_compromises,
             optimise: None,
             path,
+            max_scallop_at: None,
+            max_outside_valleys_at: None,
             verify: verification,
             gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,
             flipped_triangles: map.flipped_triangles(),
@@ -957,6 +1020,10 @@ impl PlanReport {
             }
             report.facet_valleys = Some(valleys);
         }
+        let radii = rings.radii();
+        let locate = |at: Option<&verify::ScallopAt>| at.and_then(|a| PeakAt::locate(a, &planner.surface, map, &radii));
+        report.max_scallop_at = locate(report.verify.as_ref().and_then(|v| v.max_scallop_at.as_ref()));
+        report.max_outside_valleys_at = locate(report.verify.as_ref().and_then(|v| v.max_outside_valleys_at.as_ref()));
         report
     }
 }

@@ -83,3 +83,30 @@ fn generated_parts_plan_within_the_scallop_limit() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The sweep's worst peak outside any facet valley (issue 34's sweep, gen143: a 4k-face
+/// staircase rectangle, 1.142 h): the plan reports where it is, between which rings, in the
+/// slit domain, and that place is the verifier's worst sample.
+#[test]
+fn the_sweeps_worst_peak_is_located_between_its_rings() {
+    let part = generated::part(143, slitpath::bench::SWEEP_FACES);
+    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
+    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
+    let options = plan::PlanOptions { radius_mm: r, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    let at = v.max_scallop_at.expect("a covered sample");
+    assert_eq!(at.scallop_mm, v.max_scallop_mm);
+    assert_eq!(Some(at.position), v.worst_sample);
+    let peak = p.report.max_scallop_at.as_ref().expect("located");
+    assert_eq!((peak.scallop_mm, peak.face), (at.scallop_mm, at.face));
+    let radii = &p.report.ring_radii;
+    let (outside, inside) = (peak.ring_outside.expect("inside ring 0"), peak.ring_inside.expect("outside the last"));
+    assert_eq!(inside, outside + 1);
+    assert!(radii[inside] <= peak.rho && peak.rho < radii[outside], "{peak:?}");
+    assert!(peak.theta.abs() <= std::f64::consts::PI);
+    let outside_valleys = p.report.max_outside_valleys_at.as_ref().expect("located");
+    assert!(!outside_valleys.in_valley && outside_valleys.scallop_mm == v.max_scallop_outside_valleys_mm);
+    println!("{}: max {:.3} h at {peak:?}", part.name, v.max_scallop_mm / h);
+}

@@ -148,6 +148,22 @@ pub struct Verification {
     pub vertex_uncovered: Vec<bool>,
     /// The sample with the largest scallop (the first one on a tie).
     pub worst_sample: Option<[f64; 3]>,
+    /// Where the largest scallop is: the sample, its face and scallop (`None` when no sample is
+    /// covered).
+    pub max_scallop_at: Option<ScallopAt>,
+    /// Where the largest scallop outside the facet valleys is (`None` when there is none).
+    pub max_outside_valleys_at: Option<ScallopAt>,
+}
+
+/// A sample with its scallop: where a peak of the finish is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ScallopAt {
+    pub scallop_mm: f64,
+    pub position: [f64; 3],
+    pub normal: [f64; 3],
+    pub face: u32,
+    /// Whether the sample lies in a facet valley ([`VerifyOptions::valley_lift_mm`]).
+    pub in_valley: bool,
 }
 
 /// Figures of a path of ball centres (or contact points).
@@ -370,6 +386,8 @@ fn verify_on(
         vertex_scallop_mm,
         vertex_uncovered,
         worst_sample: f.worst.map(|(_, p)| p.to_array()),
+        max_scallop_at: f.worst_at,
+        max_outside_valleys_at: f.worst_outside_valleys_at,
     })
 }
 
@@ -386,6 +404,8 @@ struct SampleFigures {
     v_max: f64,
     v_cells: usize,
     worst: Option<(f64, DVec3)>,
+    worst_at: Option<ScallopAt>,
+    worst_outside_valleys_at: Option<ScallopAt>,
     max_outside_valleys: f64,
 }
 
@@ -403,6 +423,7 @@ fn sample_figures(
     let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
     let (mut ct_sum, mut ct2_sum, mut max_ct) = (0u64, 0u64, 0u32);
     let mut worst: Option<(f64, DVec3)> = None;
+    let (mut worst_at, mut worst_outside_valleys_at): (Option<ScallopAt>, Option<ScallopAt>) = (None, None);
     let origin = surface.positions.iter().fold(DVec3::splat(f64::INFINITY), |m, &p| m.min(p));
     for (i, (s, probe)) in samples.iter().zip(probes).enumerate() {
         if probe.depth > gouge_tolerance_mm {
@@ -415,8 +436,22 @@ fn sample_figures(
         max_ct = max_ct.max(ct);
         if let Some(t) = probe.scallop {
             scallops.push(t);
-            if !valleys.is_some_and(|v| v[i]) {
+            let in_valley = valleys.is_some_and(|v| v[i]);
+            let at = || ScallopAt {
+                scallop_mm: t,
+                position: s.position.to_array(),
+                normal: s.normal.to_array(),
+                face: s.face,
+                in_valley,
+            };
+            if !in_valley {
                 max_outside_valleys = max_outside_valleys.max(t);
+                if !worst_outside_valleys_at.is_some_and(|w| w.scallop_mm >= t) {
+                    worst_outside_valleys_at = Some(at());
+                }
+            }
+            if !worst_at.is_some_and(|w| w.scallop_mm >= t) {
+                worst_at = Some(at());
             }
             let key = ((s.position - origin) / cell).floor();
             cells.push(([key.x as i64, key.y as i64, key.z as i64], t));
@@ -441,6 +476,8 @@ fn sample_figures(
         v_max,
         v_cells,
         worst,
+        worst_at,
+        worst_outside_valleys_at,
         max_outside_valleys,
     }
 }
