@@ -138,12 +138,11 @@ fn both(mesh: &TriMesh, options: PlanOptions) -> ((f64, f64), (f64, f64), String
     (a, b, field)
 }
 
-#[test]
-fn the_concentric_annulus_is_a_fixed_point() {
-    // Its conformal rings are already evenly spaced circles: the optimised field's rings, spaced
-    // alike, are as long within 0.5 %, and the plan follows the optimised field.
-    let p = planner(&fixtures::by_name("concentric_annulus").unwrap());
-    let (r, h) = (0.05, 0.0005);
+/// The annulus fixture `name` planned around its hole (ball radius `r`, scallop limit `h`): the
+/// planner, and the total length of its rings spaced on the conformal map and on the
+/// optimised field.
+fn annulus_ring_lengths(name: &str, r: f64, h: f64) -> (Planner, f64, f64) {
+    let p = planner(&fixtures::by_name(name).unwrap());
     let (map, slopes) = map_and_slopes(&p, p.solver.canonical_hole_pole(1), r);
     let optimised =
         optimise::optimise(&p.surface, &map, &slopes, &OptimiseOptions { radius_mm: r, ..Default::default() })
@@ -154,6 +153,15 @@ fn the_concentric_annulus_is_a_fixed_point() {
         spacing::spacing(&p.surface, m, &spacing).unwrap().rings.iter().map(|k| k.length_mm).sum()
     };
     let (before, after) = (length(&map), length(&optimised));
+    (p, before, after)
+}
+
+#[test]
+fn the_concentric_annulus_is_a_fixed_point() {
+    // Its conformal rings are already evenly spaced circles: the optimised field's rings, spaced
+    // alike, are as long within 0.5 %, and the plan follows the optimised field.
+    let (r, h) = (0.05, 0.0005);
+    let (p, before, after) = annulus_ring_lengths("concentric_annulus", r, h);
     assert!((after / before - 1.0).abs() < 0.005, "rings {before} mm -> {after} mm");
     let options = PlanOptions { radius_mm: r, scallop_mm: h, ..PlanOptions::default() };
     let plan = p.plan(&options, &mut |_, _, _| {}, &|| 0.0).unwrap();
@@ -176,18 +184,7 @@ fn the_eccentric_annulus_rings_are_shorter() {
     // Its conformal rings (Apollonius circles) bunch on the narrow side; the optimised field's,
     // spaced alike, are shorter. (The planner spaces an optimised field's rings for 0.92 h
     // instead of 0.95 h, which costs this part about what the field gains.)
-    let p = planner(&fixtures::by_name("eccentric_annulus").unwrap());
-    let (r, h) = (0.05, 0.0005);
-    let (map, slopes) = map_and_slopes(&p, p.solver.canonical_hole_pole(1), r);
-    let optimised =
-        optimise::optimise(&p.surface, &map, &slopes, &OptimiseOptions { radius_mm: r, ..Default::default() })
-            .unwrap()
-            .map;
-    let spacing = SpacingOptions { radius_mm: r, scallop_mm: h, ..SpacingOptions::default() };
-    let length = |m: &SlitMap| -> f64 {
-        spacing::spacing(&p.surface, m, &spacing).unwrap().rings.iter().map(|k| k.length_mm).sum()
-    };
-    let (before, after) = (length(&map), length(&optimised));
+    let (_, before, after) = annulus_ring_lengths("eccentric_annulus", 0.05, 0.0005);
     println!("eccentric annulus rings: {before:.1} mm -> {after:.1} mm");
     assert!(after < 0.98 * before, "rings {before} mm -> {after} mm");
 }
