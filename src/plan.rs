@@ -864,10 +864,8 @@ pub struct OriginReport {
 /// slit-domain image w = ρ·e^{iθ} and the rings either side of it.
 #[derive(Debug, Clone, Serialize)]
 pub struct PeakAt {
-    pub scallop_mm: f64,
-    pub position: [f64; 3],
-    pub face: u32,
-    pub in_valley: bool,
+    #[serde(flatten)]
+    pub sample: verify::ScallopAt,
     /// |w| and arg w of the sample's image.
     pub rho: f64,
     pub theta: f64,
@@ -901,16 +899,7 @@ impl PeakAt {
             Some(k) => Some(k - 1),
             None => radii.len().checked_sub(1),
         };
-        Some(Self {
-            scallop_mm: at.scallop_mm,
-            position: at.position,
-            face: at.face,
-            in_valley: at.in_valley,
-            rho,
-            theta: image.y.atan2(image.x),
-            ring_outside: outside,
-            ring_inside: inside,
-        })
+        Some(Self { sample: *at, rho, theta: image.y.atan2(image.x), ring_outside: outside, ring_inside: inside })
     }
 }
 

@@ -100,13 +100,13 @@ fn the_sweeps_worst_peak_is_located_between_its_rings() {
     assert_eq!(at.scallop_mm, v.max_scallop_mm);
     assert_eq!(Some(at.position), v.worst_sample);
     let peak = p.report.max_scallop_at.as_ref().expect("located");
-    assert_eq!((peak.scallop_mm, peak.face), (at.scallop_mm, at.face));
+    assert_eq!((peak.sample.scallop_mm, peak.sample.face), (at.scallop_mm, at.face));
     let radii = &p.report.ring_radii;
     let (outside, inside) = (peak.ring_outside.expect("inside ring 0"), peak.ring_inside.expect("outside the last"));
     assert_eq!(inside, outside + 1);
     assert!(radii[inside] <= peak.rho && peak.rho < radii[outside], "{peak:?}");
     assert!(peak.theta.abs() <= std::f64::consts::PI);
     let outside_valleys = p.report.max_outside_valleys_at.as_ref().expect("located");
-    assert!(!outside_valleys.in_valley && outside_valleys.scallop_mm == v.max_scallop_outside_valleys_mm);
+    assert!(!outside_valleys.sample.in_valley && outside_valleys.sample.scallop_mm == v.max_scallop_outside_valleys_mm);
     println!("{}: max {:.3} h at {peak:?}", part.name, v.max_scallop_mm / h);
 }

@@ -201,30 +201,12 @@ pub fn assemble(
 }
 
 fn stats(moves: &[Move], ranges: &[Range<usize>], safe: f64, strips: usize) -> ToolpathStats {
-    let (mut cut, mut link, mut rapid, mut time) = (0.0, 0.0, 0.0, 0.0);
-    for w in moves.windows(2) {
-        let length = w[1].tip.distance(w[0].tip);
-        match w[1].kind {
-            MoveKind::Cut => cut += length,
-            MoveKind::Approach | MoveKind::LeadOut => link += length,
-            MoveKind::Rapid | MoveKind::Retract => rapid += length,
-        }
-        time += length / w[1].feed_mm_min * 60.0;
-    }
     let max_axis_step_deg = ranges
         .iter()
         .flat_map(|r| moves[r.clone()].windows(2).map(|w| angle(w[0].axis, w[1].axis).to_degrees()))
         .fold(0.0, f64::max);
-    ToolpathStats {
-        cut_length_mm: cut,
-        link_length_mm: link,
-        rapid_length_mm: rapid,
-        retractions: strips,
-        cut_points: ranges.iter().map(|r| r.len()).sum(),
-        max_axis_step_deg,
-        safe_z_mm: safe,
-        estimated_time_s: time,
-    }
+    let cut_points = ranges.iter().map(|r| r.len()).sum();
+    crate::toolpath::stats_of_moves(moves, cut_points, strips, max_axis_step_deg, safe)
 }
 
 #[cfg(test)]

@@ -531,6 +531,21 @@ fn quarter_circle(p: DVec3, dir: DVec3, up: DVec3, rho: f64, lead: Lead) -> Vec<
 }
 
 fn stats(moves: &[Move], axes: &[DVec3], safe: f64) -> ToolpathStats {
+    let max_axis_step_deg =
+        axes.windows(2).map(|w| num::acos(w[0].dot(w[1]).clamp(-1.0, 1.0)).to_degrees()).fold(0.0, f64::max);
+    let retractions = moves.iter().filter(|m| m.kind == MoveKind::Retract).count();
+    stats_of_moves(moves, axes.len(), retractions, max_axis_step_deg, safe)
+}
+
+/// The statistics of `moves`: the lengths by kind and the time summed move by move (each at
+/// its own feed), with the figures the strategy counts its own way.
+pub(crate) fn stats_of_moves(
+    moves: &[Move],
+    cut_points: usize,
+    retractions: usize,
+    max_axis_step_deg: f64,
+    safe_z_mm: f64,
+) -> ToolpathStats {
     let (mut cut, mut link, mut rapid, mut time) = (0.0, 0.0, 0.0, 0.0);
     for w in moves.windows(2) {
         let length = w[1].tip.distance(w[0].tip);
@@ -541,16 +556,14 @@ fn stats(moves: &[Move], axes: &[DVec3], safe: f64) -> ToolpathStats {
         }
         time += length / w[1].feed_mm_min * 60.0;
     }
-    let max_axis_step_deg =
-        axes.windows(2).map(|w| num::acos(w[0].dot(w[1]).clamp(-1.0, 1.0)).to_degrees()).fold(0.0, f64::max);
     ToolpathStats {
         cut_length_mm: cut,
         link_length_mm: link,
         rapid_length_mm: rapid,
-        retractions: moves.iter().filter(|m| m.kind == MoveKind::Retract).count(),
-        cut_points: axes.len(),
+        retractions,
+        cut_points,
         max_axis_step_deg,
-        safe_z_mm: safe,
+        safe_z_mm,
         estimated_time_s: time,
     }
 }
