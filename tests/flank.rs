@@ -319,6 +319,15 @@ fn bad_input_gives_typed_errors() {
     ));
     assert!(matches!(err(&FlankOptions { direction: DVec3::Z, ..o.clone() }), E::DirectionAlongNormals { .. }));
     assert!(matches!(err(&FlankOptions { post: Post::LinuxCnc, ..o.clone() }), E::InvalidOption { field: "post", .. }));
+    // The tool body: a holder face inside the flutes, a shank of no width.
+    let short = FlankOptions { gauge_length_mm: Some(o.tool.flute_length_mm - 1.0), ..o.clone() };
+    assert!(matches!(err(&short), E::InvalidOption { field: "gauge_length_mm", .. }));
+    let no_flute = FlankOptions { tool: ConeTool { flute_length_mm: 0.0, ..o.tool }, ..short };
+    assert!(matches!(err(&no_flute), E::InvalidTool { field: "flute_length_mm", .. }), "the flutes named first");
+    assert!(matches!(
+        err(&FlankOptions { shank_radius_mm: Some(0.0), ..o.clone() }),
+        E::InvalidOption { field: "shank_radius_mm", .. }
+    ));
     assert!(matches!(
         err(&FlankOptions { pose_step_mm: Some(-1.0), ..o.clone() }),
         E::InvalidOption { field: "pose_step_mm", .. }
@@ -531,12 +540,16 @@ fn cli_plans_and_reports() {
         flags.iter().for_each(|(f, v)| args.extend([*f, *v]));
         std::process::Command::new(exe).args(&args).output().unwrap()
     };
-    let ok = run(&["--post", "cl", "--weights", "g1", "--strips", "3"]);
+    let ok = run(&["--post", "cl", "--weights", "g1", "--strips", "3", "--shank-radius", "2", "--gauge-length", "70"]);
     assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
     let cl = std::fs::read_to_string(&out).unwrap();
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(json["guide"]["strips"], 3);
     assert_eq!(json["options"]["weights"]["approx"], 1e-4);
+    let tool = &json["options"]["tool"];
+    assert_eq!((tool["shank_radius_mm"].as_f64(), tool["gauge_length_mm"].as_f64()), (Some(2.0), Some(70.0)));
+    assert_eq!((tool["holder_radius_mm"].as_f64(), tool["flute_length_mm"].as_f64()), (Some(4.0), Some(20.0)));
+    assert!(cl.contains("$$ - tool body: shank D4.0000 L50.0000 above the flutes, gauge 70.0000, holder D8.0000 L40"));
     assert!(json["verify"]["max_gouge_mm"].as_f64().unwrap() < 1e-3);
     assert!(slitpath::gcode::parse_cl(&cl).is_ok() && cl.contains("$$ - strip 3: moves "));
     for (extra, fault) in [

@@ -342,15 +342,6 @@ fn check(o: &FlankOptions) -> Result<(), FlankError> {
             positive(field, r)?;
         }
     }
-    if let Some(g) = o.gauge_length_mm {
-        if !(g >= o.tool.flute_length_mm && g.is_finite()) {
-            return Err(FlankError::InvalidOption {
-                field: "gauge_length_mm",
-                value: g,
-                expected: "a finite length ≥ the flute length (tip to holder face)",
-            });
-        }
-    }
     for (field, value) in [("holder_length_mm", o.holder_length_mm), ("collision_margin_mm", o.collision_margin_mm)] {
         if !(value >= 0.0 && value.is_finite()) {
             return Err(FlankError::InvalidOption { field, value, expected: "a finite number ≥ 0" });
@@ -413,6 +404,16 @@ pub fn plan(
 ) -> Result<FlankPlan, FlankError> {
     check(options)?;
     let family = options.tool.spheres()?;
+    // After the tool's own check, so a bad flute length is named as such.
+    if let Some(g) = options.gauge_length_mm {
+        if !(g >= options.tool.flute_length_mm && g.is_finite()) {
+            return Err(FlankError::InvalidOption {
+                field: "gauge_length_mm",
+                value: g,
+                expected: "a finite length ≥ the flute length (tip to holder face)",
+            });
+        }
+    }
     const STAGES: usize = 7;
     let mut timings = FlankTimings::default();
     let start = now();
@@ -629,10 +630,10 @@ fn header(
         (
             "tool body".to_string(),
             format!(
-                "shank D{:.4} gauge {:.4} (shank {:.4} above the flutes), holder D{:.4} L{:.4}, margin {:.4} mm",
+                "shank D{:.4} L{:.4} above the flutes, gauge {:.4}, holder D{:.4} L{:.4}, margin {:.4} mm",
                 2.0 * body.shank_radius_mm,
-                body.gauge_length_mm,
                 body.gauge_length_mm - o.tool.flute_length_mm,
+                body.gauge_length_mm,
                 2.0 * body.holder_radius_mm,
                 body.holder_length_mm,
                 body.margin_mm
