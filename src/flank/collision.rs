@@ -156,7 +156,7 @@ impl<'a> Checker<'a> {
             let allowance = if p.what == "shank" { self.flute_top_gouge(tip, axis) } else { 0.0 };
             if let Some(n) = self.tree.nearest_to_axis(&slab, p.radius + p.flag_below - allowance) {
                 let clearance_mm = n.radial_mm - p.radius;
-                if worst.is_none_or_larger(clearance_mm) {
+                if worse(&worst, clearance_mm) {
                     worst = Some(Hit { what: p.what, clearance_mm, at: n.point });
                 }
             }
@@ -176,7 +176,7 @@ impl<'a> Checker<'a> {
             let t = k as f64 / steps as f64;
             let axis = from.axis.lerp(to.axis, t).normalize_or(from.axis);
             if let Some(hit) = self.pose(from.tip.lerp(to.tip, t), axis, &parts) {
-                if worst.is_none_or_larger(hit.clearance_mm) {
+                if worse(&worst, hit.clearance_mm) {
                     worst = Some(hit);
                 }
             }
@@ -190,14 +190,9 @@ impl<'a> Checker<'a> {
     }
 }
 
-trait WorseThan {
-    fn is_none_or_larger(&self, clearance_mm: f64) -> bool;
-}
-
-impl WorseThan for Option<Hit> {
-    fn is_none_or_larger(&self, clearance_mm: f64) -> bool {
-        self.map_or(true, |h| clearance_mm < h.clearance_mm)
-    }
+/// Whether a clearance is worse than the worst hit so far (or there is none).
+fn worse(worst: &Option<Hit>, clearance_mm: f64) -> bool {
+    worst.map_or(true, |h| clearance_mm < h.clearance_mm)
 }
 
 fn kind_name(kind: MoveKind) -> &'static str {

@@ -223,6 +223,7 @@ mod tests {
         let positions: Vec<DVec3> = (0..300).map(|_| rng.vec(20.0)).collect();
         let triangles: Vec<[u32; 3]> = (0..100).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
         let tree = FaceTree::new(&positions, &triangles);
+        let mut hits = 0;
         for case in 0..50 {
             let slab =
                 Slab { origin: rng.vec(20.0), axis: rng.vec(1.0).normalize(), from: 0.0, to: 10.0 + 10.0 * rng.next() };
@@ -233,9 +234,13 @@ mod tests {
                 .map(|(d, _)| d)
                 .fold(f64::INFINITY, f64::min);
             match tree.nearest_to_axis(&slab, limit) {
-                Some(hit) => assert!((hit.radial_mm - all).abs() < 1e-12 && all < limit, "case {case}"),
+                Some(hit) => {
+                    hits += 1;
+                    assert!((hit.radial_mm - all).abs() < 1e-12 && all < limit, "case {case}");
+                }
                 None => assert!(all >= limit, "case {case}: tree missed {all} < {limit}"),
             }
         }
+        assert!(hits > 10 && hits < 50, "both outcomes are exercised: {hits} hits");
     }
 }
