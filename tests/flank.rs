@@ -319,6 +319,15 @@ fn bad_input_gives_typed_errors() {
     ));
     assert!(matches!(err(&FlankOptions { direction: DVec3::Z, ..o.clone() }), E::DirectionAlongNormals { .. }));
     assert!(matches!(err(&FlankOptions { post: Post::LinuxCnc, ..o.clone() }), E::InvalidOption { field: "post", .. }));
+    // The tool body: a holder face inside the flutes, a shank of no width.
+    let short = FlankOptions { gauge_length_mm: Some(o.tool.flute_length_mm - 1.0), ..o.clone() };
+    assert!(matches!(err(&short), E::InvalidOption { field: "gauge_length_mm", .. }));
+    let no_flute = FlankOptions { tool: ConeTool { flute_length_mm: 0.0, ..o.tool }, ..short };
+    assert!(matches!(err(&no_flute), E::InvalidTool { field: "flute_length_mm", .. }), "the flutes named first");
+    assert!(matches!(
+        err(&FlankOptions { shank_radius_mm: Some(0.0), ..o.clone() }),
+        E::InvalidOption { field: "shank_radius_mm", .. }
+    ));
     assert!(matches!(
         err(&FlankOptions { pose_step_mm: Some(-1.0), ..o.clone() }),
         E::InvalidOption { field: "pose_step_mm", .. }
@@ -358,14 +367,98 @@ fn holder_collisions_are_flagged_not_dropped() {
         ..FlankOptions::default()
     };
     // A holder slimmer than the flute's top (radius 2.5 mm), tilted away from the wall with the
-    // tool, clears it by more than 0.5 mm.
-    let slim = plan(&s, &FlankOptions { holder_radius_mm: Some(2.0), collision_margin_mm: 0.2, ..base.clone() });
-    assert!(slim.report.collisions.flagged.is_empty(), "{:?}", slim.report.collisions.flagged.first());
+    // tool, clears it by more than 0.2 mm.
+    let plausible = plan(&s, &FlankOptions { holder_radius_mm: Some(2.0), collision_margin_mm: 0.2, ..base.clone() });
+    assert!(plausible.report.collisions.flagged.is_empty(), "{:?}", plausible.report.collisions.flagged.first());
+    // The default holder (radius 5 mm from 36 mm above the tip) is too wide for this 4.8° taper
+    // against a 40 mm wall: the tool leans off the wall by 3 mm there, the holder sticks out by
+    // 2.5 mm, 1 mm wanted; that is flagged.
+    let default = plan(&s, &base);
+    assert!(default.report.collisions.flagged.iter().all(|f| f.what == "holder"));
+    assert!(default.report.collisions.min_clearance_mm.is_some_and(|c| c < 1.0));
     let wide = plan(&s, &FlankOptions { holder_radius_mm: Some(30.0), ..base.clone() });
     let c = &wide.report.collisions;
     assert!(!c.flagged.is_empty() && c.min_clearance_mm.unwrap() < 0.0, "{c:?}");
-    assert!(c.flagged.iter().any(|f| f.strip.is_some() && f.what == "holder"));
-    assert_eq!(wide.toolpath.moves.len(), slim.toolpath.moves.len(), "nothing is dropped");
+    assert!(c.flagged.iter().any(|f| f.strip.is_some() && f.what == "holder" && f.kind == "cut"));
+    assert_eq!(wide.toolpath.stats.cut_points, plausible.toolpath.stats.cut_points, "nothing is dropped");
+}
+
+/// The seed 002 Fig. 17 tool on the page's blade sample (issue 35: the check flagged 3374 of
+/// its 3376 moves, a holder twice the top radius starting at the flute top, and the entry
+/// descended vertically 6.1 mm into the blade). With the default shank, gauge length and holder
+/// nothing is flagged; the entry descends along the tool axis; and the old vertical descent is
+/// still caught by the check.
+#[test]
+fn blade_sample_flagged_every_move() {
+    let s = surface(&fixtures::blade(58, 56), -DVec3::X);
+    // The page's blade preset (www/src/samples.ts) and the CLI's defaults.
+    let o = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 2.87, top_radius_mm: 9.56, flute_length_mm: 21.8 },
+        direction: -DVec3::Y,
+        strips: Some(11),
+        verify_samples: 0,
+        ..FlankOptions::default()
+    };
+    let p = plan(&s, &o);
+    let c = &p.report.collisions;
+    assert!(c.checked_moves > 3000 && c.checked_moves == p.toolpath.moves.len(), "{}", c.checked_moves);
+    assert!(c.flagged.is_empty(), "{} flagged, first {:?}", c.flagged.len(), c.flagged.first());
+    assert_eq!(
+        (c.tool.shank_radius_mm, c.tool.gauge_length_mm, c.tool.holder_radius_mm),
+        (9.56, 3.0 * 21.8, 2.0 * 9.56),
+        "the documented defaults"
+    );
+    // Entry: down the first axis from the safe height to the approach point, 10 mm off the
+    // surface along its normal.
+    let m = &p.toolpath.moves;
+    let (start, approach) = (m[0], m[1]);
+    assert!((start.tip.z - p.toolpath.stats.safe_z_mm).abs() < 1e-9);
+    assert!((approach.tip - start.tip).normalize().dot(approach.axis) < -1.0 + 1e-12, "along the axis");
+    assert!((approach.tip.distance(m[2].tip) - o.retract_mm).abs() < 1e-9);
+    // The vertical descent the program used to make to the same point enters the blade.
+    let tree = slitpath::mesh::nearest::FaceTree::new(&s.positions, &s.triangles);
+    let checker = flank::collision::Checker::new(&tree, &o.tool, &flank::tool_body(&o));
+    let above = slitpath::toolpath::Move { tip: DVec3::new(approach.tip.x, approach.tip.y, start.tip.z), ..approach };
+    let hit = checker.rapid(&above, &approach).expect("the vertical descent is flagged");
+    assert!(hit.what == "flute" && hit.clearance_mm < -5.0, "{hit:?}");
+}
+
+/// A holder too near the tip (short gauge length) or a shank wider than the flute top is
+/// flagged on the blade where it meets the wall, with the part named and where.
+#[test]
+fn blade_short_gauge_and_wide_shank_are_flagged() {
+    let s = surface(&fixtures::blade(58, 56), -DVec3::X);
+    let o = FlankOptions {
+        tool: ConeTool { tip_radius_mm: 2.87, top_radius_mm: 9.56, flute_length_mm: 21.8 },
+        direction: -DVec3::Y,
+        strips: Some(11),
+        pose_step_mm: Some(341.1 / 19.0),
+        verify_samples: 0,
+        ..FlankOptions::default()
+    };
+    for (name, options, what, deeper_than) in [
+        ("gauge 30 mm", FlankOptions { gauge_length_mm: Some(30.0), ..o.clone() }, "holder", -5.0),
+        ("shank radius 10.5 mm", FlankOptions { shank_radius_mm: Some(10.5), ..o.clone() }, "shank", -0.9),
+    ] {
+        let p = plan(&s, &options);
+        let c = &p.report.collisions;
+        let cuts: usize = p.strips.iter().map(|s| s.moves.len()).sum();
+        let flagged_cuts = c.flagged.iter().filter(|f| f.strip.is_some() && f.what == what).count();
+        // Every pose meets the wall: the flute top rides on it, the shank or holder above.
+        assert_eq!(flagged_cuts, cuts, "{name}: {} of {cuts}", flagged_cuts);
+        assert!(c.min_clearance_mm.unwrap() < deeper_than, "{name}: {:?}", c.min_clearance_mm);
+        // Where: a point of the blade, at the tool part's height along the axis.
+        let f = c.flagged[c.flagged.len() / 2];
+        let mv = p.toolpath.moves[f.move_index];
+        let height = (DVec3::from_array(f.at) - mv.tip).dot(mv.axis);
+        let body = flank::tool_body(&options);
+        let (lo, hi) = if what == "holder" {
+            (body.gauge_length_mm - body.margin_mm, body.gauge_length_mm + body.holder_length_mm)
+        } else {
+            (21.8, body.gauge_length_mm)
+        };
+        assert!(height >= lo - 1e-9 && height <= hi + 1e-9, "{name}: height {height}");
+    }
 }
 
 /// The A/C program with TCP runs through LinuxCNC's rs274 and reproduces every tip and angle;
@@ -447,12 +540,16 @@ fn cli_plans_and_reports() {
         flags.iter().for_each(|(f, v)| args.extend([*f, *v]));
         std::process::Command::new(exe).args(&args).output().unwrap()
     };
-    let ok = run(&["--post", "cl", "--weights", "g1", "--strips", "3"]);
+    let ok = run(&["--post", "cl", "--weights", "g1", "--strips", "3", "--shank-radius", "2", "--gauge-length", "70"]);
     assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
     let cl = std::fs::read_to_string(&out).unwrap();
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(json["guide"]["strips"], 3);
     assert_eq!(json["options"]["weights"]["approx"], 1e-4);
+    let tool = &json["options"]["tool"];
+    assert_eq!((tool["shank_radius_mm"].as_f64(), tool["gauge_length_mm"].as_f64()), (Some(2.0), Some(70.0)));
+    assert_eq!((tool["holder_radius_mm"].as_f64(), tool["flute_length_mm"].as_f64()), (Some(4.0), Some(20.0)));
+    assert!(cl.contains("$$ - tool body: shank D4.0000 L50.0000 above the flutes, gauge 70.0000, holder D8.0000 L40"));
     assert!(json["verify"]["max_gouge_mm"].as_f64().unwrap() < 1e-3);
     assert!(slitpath::gcode::parse_cl(&cl).is_ok() && cl.contains("$$ - strip 3: moves "));
     for (extra, fault) in [

@@ -20,8 +20,9 @@
 //!    branch nearer the surface.
 //! 7. [`output`] and [`collision`]: poses densified to the chordal and angular tolerances, the
 //!    program (tool tip + axis per move) through the existing posts ([`crate::gcode`]: A/C with
-//!    TCP, APT CL data) with the tool and the strips named in the header; holder collisions
-//!    flagged, never dropped.
+//!    TCP, APT CL data) with the tool and the strips named in the header; strips entered and
+//!    left along the surface normal, links along the tool axis; shank, holder and rapid
+//!    collisions flagged, never dropped.
 //! 8. The independent verifier [`crate::verify::flank`] reads the CL data back.
 //!
 //! Entry: [`plan`]. Preconditions: a connected surface from [`crate::mesh`] (normals towards the
@@ -105,10 +106,15 @@ pub struct FlankOptions {
     pub chord_tolerance_mm: f64,
     /// Largest axis step between consecutive poses, degrees [0.5].
     pub angle_tolerance_deg: f64,
-    /// Holder above the flute: length, radius, and the clearance wanted, mm [40, None: twice
-    /// the top radius, 1].
-    pub holder_length_mm: f64,
+    /// The tool above the flutes, as the collision check sees it ([`collision`]): the shank's
+    /// radius [None: the top radius, a shank no wider than the flutes], the gauge length from
+    /// the tip to the holder's face [None: 3 × the flute length, a shank twice the flute
+    /// length], the holder's radius [None: twice the shank's] and length [40], and the clearance
+    /// wanted from the holder and, on rapids, the flutes [1], mm.
+    pub shank_radius_mm: Option<f64>,
+    pub gauge_length_mm: Option<f64>,
     pub holder_radius_mm: Option<f64>,
+    pub holder_length_mm: f64,
     pub collision_margin_mm: f64,
     /// Distance of the approach and retract points from the surface, along its normal, mm [10].
     pub retract_mm: f64,
@@ -146,8 +152,10 @@ impl Default for FlankOptions {
             rigidity_tolerance_rel: 1e-4,
             chord_tolerance_mm: 0.002,
             angle_tolerance_deg: 0.5,
-            holder_length_mm: 40.0,
+            shank_radius_mm: None,
+            gauge_length_mm: None,
             holder_radius_mm: None,
+            holder_length_mm: 40.0,
             collision_margin_mm: 1.0,
             retract_mm: 10.0,
             zigzag: true,
@@ -220,10 +228,19 @@ pub struct FlankPlan {
     pub guides: guide::Guides,
 }
 
+/// The tool as the report shows it: the flutes and what is above them (defaults resolved).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ToolReport {
+    #[serde(flatten)]
+    pub flutes: ConeTool,
+    #[serde(flatten)]
+    pub body: collision::ToolBody,
+}
+
 /// The options as the report shows them.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OptionsReport {
-    pub tool: ConeTool,
+    pub tool: ToolReport,
     pub direction: [f64; 3],
     pub strips: Option<usize>,
     pub pose_step_mm: f64,
@@ -320,8 +337,10 @@ fn check(o: &FlankOptions) -> Result<(), FlankError> {
     positive("rapid_mm_min", o.rapid_mm_min)?;
     positive("spindle_rpm", o.spindle_rpm)?;
     positive("verify_tolerance_mm", o.verify_tolerance_mm)?;
-    if let Some(r) = o.holder_radius_mm {
-        positive("holder_radius_mm", r)?;
+    for (field, value) in [("shank_radius_mm", o.shank_radius_mm), ("holder_radius_mm", o.holder_radius_mm)] {
+        if let Some(r) = value {
+            positive(field, r)?;
+        }
     }
     for (field, value) in [("holder_length_mm", o.holder_length_mm), ("collision_margin_mm", o.collision_margin_mm)] {
         if !(value >= 0.0 && value.is_finite()) {
@@ -385,6 +404,16 @@ pub fn plan(
 ) -> Result<FlankPlan, FlankError> {
     check(options)?;
     let family = options.tool.spheres()?;
+    // After the tool's own check, so a bad flute length is named as such.
+    if let Some(g) = options.gauge_length_mm {
+        if !(g >= options.tool.flute_length_mm && g.is_finite()) {
+            return Err(FlankError::InvalidOption {
+                field: "gauge_length_mm",
+                value: g,
+                expected: "a finite length ≥ the flute length (tip to holder face)",
+            });
+        }
+    }
     const STAGES: usize = 7;
     let mut timings = FlankTimings::default();
     let start = now();
@@ -477,21 +506,19 @@ pub fn plan(
         }
         strip_poses.push(output::StripPoses { poses: dense, retract_first: first, retract_last: last });
     }
-    let (toolpath, ranges) = output::assemble(&strip_poses, &options.tool, &family, hi.z, &out);
+    let body = tool_body(options);
+    let checker = collision::Checker::new(&tree, &options.tool, &body);
+    let clear = |from: &crate::toolpath::Move, to: &crate::toolpath::Move| checker.rapid(from, to).is_none();
+    let (toolpath, ranges) = output::assemble(&strip_poses, &options.tool, &family, hi.z, &out, &clear);
     for (s, r) in strips.iter_mut().zip(&ranges) {
         s.moves = r.clone();
     }
-    let holder = collision::Holder {
-        length_mm: options.holder_length_mm,
-        radius_mm: options.holder_radius_mm.unwrap_or(2.0 * options.tool.top_radius_mm),
-        margin_mm: options.collision_margin_mm,
-    };
-    let collisions = collision::check(&tree, &toolpath, &ranges, &options.tool, &holder);
+    let collisions = collision::check(&checker, &toolpath, &ranges);
     timings.output = now() - t;
 
     progress("post", 5, STAGES);
     let t = now();
-    let header = header(options, &family, &ranges, &optimised.report);
+    let header = header(options, &family, &body, &ranges, &optimised.report);
     let gcode_options = |post: Post| GcodeOptions {
         post,
         decimals: options.decimals,
@@ -525,7 +552,7 @@ pub fn plan(
     let report = FlankReport {
         strategy: "flank",
         options: OptionsReport {
-            tool: options.tool,
+            tool: ToolReport { flutes: options.tool, body },
             direction: options.direction.to_array(),
             strips: options.strips,
             pose_step_mm: step,
@@ -569,11 +596,24 @@ pub fn plan(
     Ok(FlankPlan { report, toolpath, gcode, cl, strips, guides })
 }
 
-/// The header lines: the strategy, the tool's spheres, the weights, the rigidity reached, and
-/// every strip's moves (the verifier reads those back).
+/// The tool above the flutes with the defaults of [`FlankOptions`] resolved.
+pub fn tool_body(o: &FlankOptions) -> collision::ToolBody {
+    let shank = o.shank_radius_mm.unwrap_or(o.tool.top_radius_mm);
+    collision::ToolBody {
+        shank_radius_mm: shank,
+        gauge_length_mm: o.gauge_length_mm.unwrap_or(3.0 * o.tool.flute_length_mm),
+        holder_radius_mm: o.holder_radius_mm.unwrap_or(2.0 * shank),
+        holder_length_mm: o.holder_length_mm,
+        margin_mm: o.collision_margin_mm,
+    }
+}
+
+/// The header lines: the strategy, the tool's spheres and body, the weights, the rigidity
+/// reached, and every strip's moves (the verifier reads those back).
 fn header(
     o: &FlankOptions,
     f: &SphereFamily,
+    body: &collision::ToolBody,
     ranges: &[Range<usize>],
     opt: &optimise::OptimiseReport,
 ) -> Vec<(String, String)> {
@@ -585,6 +625,18 @@ fn header(
             format!(
                 "r1 {:.4} r2 {:.4} L {:.4} contact length {:.4} mm",
                 f.r1_mm, f.r2_mm, f.length_mm, f.contact_length_mm
+            ),
+        ),
+        (
+            "tool body".to_string(),
+            format!(
+                "shank D{:.4} L{:.4} above the flutes, gauge {:.4}, holder D{:.4} L{:.4}, margin {:.4} mm",
+                2.0 * body.shank_radius_mm,
+                body.gauge_length_mm - o.tool.flute_length_mm,
+                body.gauge_length_mm,
+                2.0 * body.holder_radius_mm,
+                body.holder_length_mm,
+                body.margin_mm
             ),
         ),
         (

@@ -8,19 +8,26 @@
 //! between consecutive axes within `angle_tolerance_deg`. Every inserted pose is made rigid
 //! about its midpoint (|b − a| = L).
 //!
-//! The program (one [`Toolpath`] for every post): a rapid to the safe height above the first
-//! strip's retract point, down to it, then for every strip a feed move in along the surface
-//! normal to its first pose ([`MoveKind::Approach`], at the plunge feed), the cut through every
-//! pose ([`MoveKind::Cut`]), a feed move out along the normal to the retract point
-//! ([`MoveKind::LeadOut`]) and a rapid to the next strip's retract point; after the last strip
-//! a rapid up to the safe height ([`MoveKind::Retract`]). The retract point of a pose is its
-//! tool tip moved `retract_mm` along the mean surface normal of its two grid points. With
-//! `zigzag` every other strip runs backwards, so each link is a short hop between neighbouring
-//! strip ends. A move's `tip` is the tool tip (the centre of the tip circle), `axis` the unit
-//! axis towards the shank, `centre` the tip sphere's centre a.
+//! The program (one [`Toolpath`] for every post). Every strip is entered and left along the
+//! surface normal: a feed move in from its approach point to its first pose
+//! ([`MoveKind::Approach`], at the plunge feed), the cut through every pose ([`MoveKind::Cut`]),
+//! a feed move out along the normal to the retract point ([`MoveKind::LeadOut`]). The approach
+//! (retract) point of a pose is its tool tip moved `retract_mm` along the mean surface normal of
+//! its two grid points. Between them the tool travels at rapid, and never straight down beside
+//! the part: from the safe height it descends along its own axis to the first approach point
+//! (the tool slides along itself, so only its tip end enters new space, `retract_mm` off the
+//! surface); from one strip's retract point to the next strip's approach point it hops
+//! straight when the caller's check finds the hop clear (with `zigzag` the hops are short,
+//! between neighbouring strip ends), otherwise it retracts along its axis to the safe height,
+//! crosses there, and descends along the next axis; after the last strip it retracts along its
+//! axis to the safe height ([`MoveKind::Retract`]). An axis within [`MIN_AXIS_Z`] of horizontal
+//! cannot reach the safe height along itself: such a pose is left and entered vertically
+//! instead (the collision check says whether that is safe). With `zigzag` every other strip
+//! runs backwards. A move's `tip` is the tool tip (the centre of the tip circle), `axis` the
+//! unit axis towards the shank, `centre` the tip sphere's centre a.
 //!
 //! The safe height (+Z) is 10 mm above the highest point of the part and of every tool position
-//! (tip and flute top).
+//! (tip and flute top); with the axis pointing up, the whole tool is above the part there.
 //!
 //! The [`Toolpath`] is the posts' plain input; its spiral-minded parts read as follows here:
 //! `first_contact` is the first strip's first pose, `stats.cut_points` counts every strip's
@@ -47,6 +54,9 @@ pub struct OutputOptions {
     pub spindle_rpm: f64,
     pub tool_number: u32,
 }
+
+/// Smallest Z component of an axis the program retracts along (about 78° from vertical).
+pub const MIN_AXIS_Z: f64 = 0.2;
 
 /// Most pieces an interval between two optimised poses is split into.
 const MAX_PIECES: usize = 4096;
@@ -127,13 +137,15 @@ pub struct StripPoses {
 }
 
 /// The program of the strips (module docs) and, per strip, the range of its moves from the
-/// approach's end (the first pose) to the last pose.
+/// approach's end (the first pose) to the last pose. `clear(from, to)`: whether the straight
+/// rapid between two moves' poses is free of the part.
 pub fn assemble(
     strips: &[StripPoses],
     tool: &ConeTool,
     family: &SphereFamily,
     part_top_z: f64,
     o: &OutputOptions,
+    clear: &dyn Fn(&Move, &Move) -> bool,
 ) -> (Toolpath, Vec<Range<usize>>) {
     let pose_move = |kind: MoveKind, (a, b): (DVec3, DVec3), feed: f64| {
         let axis = (b - a).normalize();
@@ -146,41 +158,43 @@ pub fn assemble(
         feed_mm_min: feed,
         ..m
     };
-    let mut body: Vec<Move> = Vec::new();
-    let mut ranges = Vec::new();
-    for (i, strip) in strips.iter().enumerate() {
+    // Each strip: its approach point, its moves from the first pose to the lead-out's end.
+    let mut pieces: Vec<(Move, Vec<Move>)> = Vec::with_capacity(strips.len());
+    for strip in strips {
         let first = pose_move(MoveKind::Approach, strip.poses[0], o.plunge_feed_mm_min);
-        let entry = retract(first, strip.retract_first, MoveKind::Rapid, o.rapid_mm_min);
-        if i > 0 {
-            body.push(entry);
-        }
-        let start = body.len();
-        body.push(first);
-        for &p in &strip.poses[1..] {
-            body.push(pose_move(MoveKind::Cut, p, o.feed_mm_min));
-        }
-        ranges.push(start..body.len());
-        let last = *body.last().expect("a pose");
-        body.push(retract(last, strip.retract_last, MoveKind::LeadOut, o.feed_mm_min));
+        let mut moves = vec![first];
+        moves.extend(strip.poses[1..].iter().map(|&p| pose_move(MoveKind::Cut, p, o.feed_mm_min)));
+        let last = *moves.last().expect("a pose");
+        moves.push(retract(last, strip.retract_last, MoveKind::LeadOut, o.feed_mm_min));
+        pieces.push((retract(first, strip.retract_first, MoveKind::Rapid, o.rapid_mm_min), moves));
     }
     // Safe height: above the part and every tool position.
     let top = |m: &Move| m.tip.z.max((m.tip + tool.flute_length_mm * m.axis).z);
-    let safe = body.iter().map(top).fold(part_top_z, f64::max) + 10.0;
-    let at_safe = |m: Move, kind: MoveKind| Move {
-        kind,
-        tip: DVec3::new(m.tip.x, m.tip.y, safe),
-        centre: m.centre + DVec3::new(0.0, 0.0, safe - m.tip.z),
-        feed_mm_min: o.rapid_mm_min,
-        ..m
+    let safe = pieces
+        .iter()
+        .flat_map(|(entry, moves)| std::iter::once(entry).chain(moves))
+        .map(top)
+        .fold(part_top_z, f64::max)
+        + 10.0;
+    // The move to the safe height along the axis of `m` (vertically when the axis is too flat).
+    let up = |m: &Move, kind: MoveKind| {
+        let lift =
+            if m.axis.z >= MIN_AXIS_Z { m.axis * ((safe - m.tip.z) / m.axis.z) } else { DVec3::Z * (safe - m.tip.z) };
+        Move { kind, tip: m.tip + lift, centre: m.centre + lift, feed_mm_min: o.rapid_mm_min, ..*m }
     };
-    let first_pose = pose_move(MoveKind::Approach, strips[0].poses[0], o.plunge_feed_mm_min);
-    let entry = retract(first_pose, strips[0].retract_first, MoveKind::Rapid, o.rapid_mm_min);
-    let mut moves = vec![at_safe(entry, MoveKind::Rapid), entry];
-    let shift = moves.len();
-    moves.extend(body);
-    let exit = at_safe(*moves.last().expect("moves"), MoveKind::Retract);
+    let mut moves = Vec::new();
+    let mut ranges = Vec::new();
+    for (entry, body) in pieces {
+        match moves.last().copied() {
+            None => moves.extend([up(&entry, MoveKind::Rapid), entry]),
+            Some(left) if clear(&left, &entry) => moves.push(entry),
+            Some(left) => moves.extend([up(&left, MoveKind::Rapid), up(&entry, MoveKind::Rapid), entry]),
+        }
+        ranges.push(moves.len()..moves.len() + body.len() - 1);
+        moves.extend(body);
+    }
+    let exit = up(moves.last().expect("moves"), MoveKind::Retract);
     moves.push(exit);
-    let ranges: Vec<Range<usize>> = ranges.into_iter().map(|r| r.start + shift..r.end + shift).collect();
     let stats = stats(&moves, &ranges, safe, strips.len());
     let toolpath = Toolpath {
         moves,
@@ -268,7 +282,7 @@ mod tests {
                 retract_last: DVec3::X,
             },
         ];
-        let (tp, ranges) = assemble(&strips, &tool, &family, 0.0, &o);
+        let (tp, ranges) = assemble(&strips, &tool, &family, 0.0, &o, &|_, _| true);
         assert_eq!(ranges.len(), 2);
         assert_eq!(ranges[0].len(), dense.len());
         assert_eq!(tp.moves[ranges[0].start].kind, MoveKind::Approach);
@@ -279,5 +293,31 @@ mod tests {
         }
         assert_eq!(tp.stats.cut_points, 2 * dense.len());
         assert!(tp.moves[0].tip.z >= tp.stats.safe_z_mm - 1e-12);
+        // A clear hop goes straight from the lead-out's end to the next approach point.
+        let lead_out = ranges[0].end;
+        assert_eq!(tp.moves[lead_out].kind, MoveKind::LeadOut);
+        assert_eq!(ranges[1].start, lead_out + 2);
+
+        // Links the check refuses go up along the axis, across at the safe height, down along
+        // the next axis; entry and exit along the axis too, never vertically beside the part.
+        let (tp, ranges) = assemble(&strips, &tool, &family, 0.0, &o, &|_, _| false);
+        assert_eq!(ranges[1].start, ranges[0].end + 4);
+        let safe = tp.stats.safe_z_mm;
+        let along_axis = |p: &Move, q: &Move| {
+            let d = q.tip - p.tip;
+            p.axis == q.axis && d.cross(p.axis).length() < 1e-9 * d.length().max(1.0)
+        };
+        let m = &tp.moves;
+        assert!((m[0].tip.z - safe).abs() < 1e-9 && along_axis(&m[0], &m[1]));
+        let l = ranges[0].end;
+        assert!(along_axis(&m[l], &m[l + 1]) && (m[l + 1].tip.z - safe).abs() < 1e-9);
+        assert!((m[l + 2].tip.z - safe).abs() < 1e-9 && along_axis(&m[l + 2], &m[l + 3]));
+        assert_eq!(m[l + 4].kind, MoveKind::Approach);
+        let n = m.len();
+        assert!(along_axis(&m[n - 2], &m[n - 1]) && (m[n - 1].tip.z - safe).abs() < 1e-9);
+        // Approach and lead-out run along the surface normal (here +X), retract_mm long.
+        for (p, q) in [(&m[1], &m[2]), (&m[l - 1], &m[l])] {
+            assert!(((q.tip - p.tip).abs() - DVec3::new(o.retract_mm, 0.0, 0.0)).length() < 1e-9);
+        }
     }
 }

@@ -20,7 +20,8 @@
 //!
 //! And a query structure the later stages share: [`nearest`], the nearest facet point of a 3D
 //! point and a ball moved onto the mesh's offset surface (the toolpath keeps every ball centre
-//! off the facets with it).
+//! off the facets with it), and [`axial`], the facet point nearest to an axis within a slab
+//! across it (the flank collision check's cylinders).
 //!
 //! Invariants of the output [`Surface`]: every edge has one or two faces, every vertex has a single
 //! fan, faces are wound counter-clockwise seen from the tool side, `loops[0]` is the outer boundary
@@ -29,6 +30,7 @@
 //!
 //! Bad input never panics: every fault is a [`MeshError`] that names it.
 
+pub mod axial;
 pub mod creases;
 pub mod extract;
 pub mod geometry;

@@ -23,16 +23,16 @@ pub const CLEAR_REL: f64 = 1e-9;
 /// centroids); a leaf's slots hold the faces `order[start..start + count]`.
 #[derive(Clone, Debug)]
 pub struct FaceTree {
-    nodes: Vec<Node>,
-    order: Vec<u32>,
-    corners: Vec<[DVec3; 3]>,
+    pub(super) nodes: Vec<Node>,
+    pub(super) order: Vec<u32>,
+    pub(super) corners: Vec<[DVec3; 3]>,
     /// Unit normal and offset of each slot's plane (zero for a degenerate face): a face whose
     /// plane is already beyond the bound is skipped without its closest point, which is most of
     /// the faces under a ball resting on the surface.
     planes: Vec<(DVec3, f64)>,
     /// Bounding sphere (centroid, radius) of each slot's face: the cheap test of a move against
     /// the faces round the one it passes over.
-    spheres: Vec<(DVec3, f64)>,
+    pub(super) spheres: Vec<(DVec3, f64)>,
     /// Slot of each face.
     slot_of: Vec<u32>,
 }
@@ -322,22 +322,22 @@ impl FaceTree {
 /// A traversal stack without allocation. The tree is balanced (median splits), so its depth is
 /// at most 32 for any u32 face count, and a depth-first traversal keeps at most one pending
 /// sibling per level.
-struct Stack<T: Copy> {
+pub(super) struct Stack<T: Copy> {
     items: [T; 64],
     len: usize,
 }
 
 impl<T: Copy> Stack<T> {
-    fn new(fill: T) -> Self {
+    pub(super) fn new(fill: T) -> Self {
         Self { items: [fill; 64], len: 0 }
     }
 
-    fn push(&mut self, item: T) {
+    pub(super) fn push(&mut self, item: T) {
         self.items[self.len] = item;
         self.len += 1;
     }
 
-    fn pop(&mut self) -> Option<T> {
+    pub(super) fn pop(&mut self) -> Option<T> {
         self.len = self.len.checked_sub(1)?;
         Some(self.items[self.len])
     }

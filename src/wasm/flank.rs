@@ -24,8 +24,10 @@ struct JsFlankOptions {
     post: Option<String>,
     chord_tolerance_mm: Option<f64>,
     angle_tolerance_deg: Option<f64>,
-    holder_length_mm: Option<f64>,
+    shank_radius_mm: Option<f64>,
+    gauge_length_mm: Option<f64>,
     holder_radius_mm: Option<f64>,
+    holder_length_mm: Option<f64>,
     collision_margin_mm: Option<f64>,
     retract_mm: Option<f64>,
     zigzag: Option<bool>,
@@ -45,7 +47,7 @@ enum JsWeights {
 }
 
 impl JsFlankOptions {
-    const FIELDS: [&'static str; 22] = [
+    const FIELDS: [&'static str; 24] = [
         "tipRadiusMm",
         "topRadiusMm",
         "fluteLengthMm",
@@ -57,8 +59,10 @@ impl JsFlankOptions {
         "post",
         "chordToleranceMm",
         "angleToleranceDeg",
-        "holderLengthMm",
+        "shankRadiusMm",
+        "gaugeLengthMm",
         "holderRadiusMm",
+        "holderLengthMm",
         "collisionMarginMm",
         "retractMm",
         "zigzag",
@@ -106,8 +110,10 @@ impl JsFlankOptions {
             weights,
             chord_tolerance_mm: js.chord_tolerance_mm.unwrap_or(d.chord_tolerance_mm),
             angle_tolerance_deg: js.angle_tolerance_deg.unwrap_or(d.angle_tolerance_deg),
-            holder_length_mm: js.holder_length_mm.unwrap_or(d.holder_length_mm),
+            shank_radius_mm: js.shank_radius_mm,
+            gauge_length_mm: js.gauge_length_mm,
             holder_radius_mm: js.holder_radius_mm,
+            holder_length_mm: js.holder_length_mm.unwrap_or(d.holder_length_mm),
             collision_margin_mm: js.collision_margin_mm.unwrap_or(d.collision_margin_mm),
             retract_mm: js.retract_mm.unwrap_or(d.retract_mm),
             zigzag: js.zigzag.unwrap_or(d.zigzag),

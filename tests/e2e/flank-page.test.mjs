@@ -59,7 +59,14 @@ describe("the flank strategy on the page", { concurrency: false }, () => {
       assert.match(await metric(id), /\d/, `${id} shows a figure`);
     }
     assert.match(await metric("metric-flank-strips"), /^11 /);
-    assert.match(await page.getByTestId("cli-command").textContent(), /^slitpath flank PART\.stl --tip-radius 2\.87 /);
+    // The preset's tool body (Ø19 shank, 70 mm gauge, Ø40 holder) clears the blade: nothing is
+    // flagged (issue 35: a holder at the flute top flagged 3374 of 3376 moves).
+    assert.equal(await metric("metric-flank-body"), "9.5 mm / 70 mm / 20 mm");
+    assert.equal(await metric("metric-flank-collisions"), "0");
+    assert.match(
+      await page.getByTestId("cli-command").textContent(),
+      /^slitpath flank PART\.stl --tip-radius 2\.87 --top-radius 9\.56 --flute-length 21\.8 --shank-radius 9\.5 --gauge-length 70 --holder-radius 20 /,
+    );
     assert.match(page.url(), /[?&]strategy=flank\b/, "the strategy is in the URL");
     assert.equal(await page.getByTestId("flank-2d-note").isVisible(), true, "the 2D view says the slit map does not apply");
     await shot("flank-1-blade.png");
@@ -111,6 +118,16 @@ describe("the flank strategy on the page", { concurrency: false }, () => {
     const state = await replan(() => page.getByTestId("opt-flank-flute").fill("21.8"));
     assert.equal(state, "planned");
     assert.equal(await metric("metric-flank-gouge"), gouge, "the same options plan the same figures");
+  });
+
+  it("flags a holder too near the tip, and refuses a gauge length shorter than the flutes", async () => {
+    const short = await replan(() => page.getByTestId("opt-flank-gauge").fill("30"));
+    assert.equal(short, "planned");
+    assert.match(await metric("metric-flank-collisions"), /^[\d,]+ of [\d,]+ moves; worst: holder on (cut|approach) move \d+, -[\d.]+ mm at \(/);
+    const refused = await replan(() => page.getByTestId("opt-flank-gauge").fill("10"));
+    assert.match(refused, /^error: .*gauge_length_mm = 10/);
+    assert.equal(await replan(() => page.getByTestId("opt-flank-gauge").fill("70")), "planned");
+    assert.equal(await metric("metric-flank-collisions"), "0");
   });
 
   it("goes back to the spiral strategy", async () => {

@@ -13,6 +13,9 @@ const PARAM: Record<Key, string> = {
   tipRadiusMm: "flank-tip",
   topRadiusMm: "flank-top",
   fluteLengthMm: "flank-flute",
+  shankRadiusMm: "flank-shank",
+  gaugeLengthMm: "flank-gauge",
+  holderRadiusMm: "flank-holder",
   direction: "flank-direction",
   strips: "flank-strips",
   weights: "flank-priority",
@@ -45,6 +48,11 @@ export function parseFlank<K extends Key>(key: K, text: string): FlankFormOption
       break;
     case "strips":
       value = stripsFromText(text);
+      break;
+    case "shankRadiusMm":
+    case "gaugeLengthMm":
+    case "holderRadiusMm":
+      value = text.trim() === "" || text === "auto" ? null : text.trim() !== "" && Number.isFinite(Number(text)) ? Number(text) : undefined;
       break;
     case "weights":
       value = text === "accuracy" || text === "g1" ? text : undefined;
@@ -92,7 +100,11 @@ export function flankQuery(strategy: Strategy, flank: FlankFormOptions): [string
 /** The `slitpath flank` arguments that plan with `flank` (the CLI has no defaults for the tool and direction). */
 export function flankCliArguments(flank: FlankFormOptions): string[] {
   const args = ["--tip-radius", String(flank.tipRadiusMm), "--top-radius", String(flank.topRadiusMm)];
-  args.push("--flute-length", String(flank.fluteLengthMm), "--direction", directionToText(flank.direction));
+  args.push("--flute-length", String(flank.fluteLengthMm));
+  if (flank.shankRadiusMm !== null) args.push("--shank-radius", String(flank.shankRadiusMm));
+  if (flank.gaugeLengthMm !== null) args.push("--gauge-length", String(flank.gaugeLengthMm));
+  if (flank.holderRadiusMm !== null) args.push("--holder-radius", String(flank.holderRadiusMm));
+  args.push("--direction", directionToText(flank.direction));
   if (flank.strips !== null) args.push("--strips", String(flank.strips));
   args.push("--weights", flank.weights, "--post", flank.post, "--feed", String(flank.feedMmMin), "--spindle", String(flank.spindleRpm));
   return args;

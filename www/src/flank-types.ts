@@ -32,8 +32,15 @@ export interface FlankOptions {
   post?: "ac" | "cl";
   chordToleranceMm?: number;
   angleToleranceDeg?: number;
-  holderLengthMm?: number;
+  /** Radius of the shank (or neck) above the flutes, mm. Default: the top radius. */
+  shankRadiusMm?: number;
+  /** Gauge length, from the tool tip to the holder's face, mm. Default: 3 × the flute length. */
+  gaugeLengthMm?: number;
+  /** Radius of the holder, mm. Default: twice the shank radius. */
   holderRadiusMm?: number;
+  /** Length of the holder along the axis from its face, mm. Default 40. */
+  holderLengthMm?: number;
+  /** Clearance wanted from the holder and, on rapids, the flutes, mm. Default 1. */
   collisionMarginMm?: number;
   retractMm?: number;
   /** Every other strip backwards (short links). Default true. */
@@ -46,6 +53,16 @@ export interface FlankOptions {
   verifySamples?: number;
   /** Name in the program header (the CLI uses the file name without extension). Default "part". */
   partName?: string;
+}
+
+/** The tool above the flutes as the collision check sees it (Rust `slitpath::flank::collision::ToolBody`). */
+export interface FlankToolBody {
+  shank_radius_mm: number;
+  /** From the tool tip to the holder's face. */
+  gauge_length_mm: number;
+  holder_radius_mm: number;
+  holder_length_mm: number;
+  margin_mm: number;
 }
 
 /** Deviation figures of one strip, mm (positive: material left, negative: gouge). */
@@ -117,7 +134,8 @@ export interface FlankGridFigures {
 export interface FlankReport {
   strategy: string;
   options: {
-    tool: { tip_radius_mm: number; top_radius_mm: number; flute_length_mm: number };
+    /** The flutes and the tool above them (defaults resolved). */
+    tool: { tip_radius_mm: number; top_radius_mm: number; flute_length_mm: number } & FlankToolBody;
     direction: Vec3;
     strips: number | null;
     pose_step_mm: number;
@@ -155,9 +173,18 @@ export interface FlankReport {
     safe_z_mm: number;
   };
   collisions: {
-    holder: { length_mm: number; radius_mm: number; margin_mm: number };
+    /** The tool above the flutes, defaults resolved. */
+    tool: FlankToolBody;
     checked_moves: number;
-    flagged: { move_index: number; strip: number | null; what: string; clearance_mm: number }[];
+    /** One per flagged move: its kind, the tool part met, its clearance (negative: inside) and where. */
+    flagged: {
+      move_index: number;
+      kind: "cut" | "approach" | "lead-out" | "rapid" | "retract";
+      strip: number | null;
+      what: "holder" | "shank" | "flute";
+      clearance_mm: number;
+      at: [number, number, number];
+    }[];
     min_clearance_mm: number | null;
   };
   /** Absent (null) with `verifySamples: 0`. */

@@ -1,6 +1,7 @@
 // The flank sample (written by `slitpath fixture blade` in scripts/start.sh and scripts/test.sh)
 // and the options it is planned with: the tool of seed 002 Fig. 17 (its sphere family r₁ 3,
-// r₂ 10, L 23.85 mm is the cone 2.87 / 9.56 / 21.8 mm), 11 strips. Its concave side faces −X:
+// r₂ 10, L 23.85 mm is the cone 2.87 / 9.56 / 21.8 mm) on a Ø19 mm shank with 70 mm gauge length
+// in a Ø40 mm shrink-fit holder, 11 strips. Its concave side faces −X:
 // along −Y the tool's shank points up (n × D = +Z).
 
 import type { Vec3 } from "./core";
@@ -14,6 +15,9 @@ export const BLADE_PRESET: Readonly<FlankFormOptions> = Object.freeze({
   tipRadiusMm: 2.87,
   topRadiusMm: 9.56,
   fluteLengthMm: 21.8,
+  shankRadiusMm: 9.5,
+  gaugeLengthMm: 70,
+  holderRadiusMm: 20,
   direction: [0, -1, 0] as Vec3,
   strips: 11,
 });

@@ -46,13 +46,20 @@ pub struct FlankArgs {
     /// Largest tool-axis step between moves, degrees.
     #[arg(long, default_value_t = 0.5)]
     pub angle: f64,
-    /// Holder above the flute: length and radius (default twice the top radius), and the
-    /// clearance wanted, mm.
-    #[arg(long, default_value_t = 40.0)]
-    pub holder_length: f64,
-    #[arg(long)]
+    /// Radius of the shank (or neck) above the flutes, mm (default: the top radius).
+    #[arg(long, allow_hyphen_values = true)]
+    pub shank_radius: Option<f64>,
+    /// Gauge length: from the tool tip to the holder's face, mm (default: 3 × the flute length).
+    #[arg(long, allow_hyphen_values = true)]
+    pub gauge_length: Option<f64>,
+    /// Radius of the holder, mm (default: twice the shank radius).
+    #[arg(long, allow_hyphen_values = true)]
     pub holder_radius: Option<f64>,
-    #[arg(long, default_value_t = 1.0)]
+    /// Length of the holder along the axis from its face, mm.
+    #[arg(long, default_value_t = 40.0, allow_hyphen_values = true)]
+    pub holder_length: f64,
+    /// Clearance wanted from the holder and, on rapids, the flutes, mm.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub margin: f64,
     /// Approach and retract distance along the surface normal, mm.
     #[arg(long, default_value_t = 10.0)]
@@ -117,8 +124,10 @@ pub fn options(a: &FlankArgs) -> Result<FlankOptions, String> {
         weights,
         chord_tolerance_mm: a.chord,
         angle_tolerance_deg: a.angle,
-        holder_length_mm: a.holder_length,
+        shank_radius_mm: a.shank_radius,
+        gauge_length_mm: a.gauge_length,
         holder_radius_mm: a.holder_radius,
+        holder_length_mm: a.holder_length,
         collision_margin_mm: a.margin,
         retract_mm: a.retract,
         zigzag: !a.one_way,

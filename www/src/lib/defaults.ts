@@ -33,6 +33,10 @@ export interface FlankFormOptions {
   tipRadiusMm: number;
   topRadiusMm: number;
   fluteLengthMm: number;
+  /** The tool above the flutes; null: the core's default (shank = top radius, gauge = 3 × flute, holder = 2 × shank). */
+  shankRadiusMm: number | null;
+  gaugeLengthMm: number | null;
+  holderRadiusMm: number | null;
   direction: Vec3;
   strips: number | null;
   weights: "accuracy" | "g1";
@@ -45,6 +49,9 @@ export const DEFAULT_FLANK_OPTIONS: Readonly<FlankFormOptions> = Object.freeze({
   tipRadiusMm: 1.5,
   topRadiusMm: 2.5,
   fluteLengthMm: 20,
+  shankRadiusMm: null,
+  gaugeLengthMm: null,
+  holderRadiusMm: null,
   direction: [1, 0, 0] as Vec3,
   strips: null,
   weights: "accuracy",
@@ -53,8 +60,11 @@ export const DEFAULT_FLANK_OPTIONS: Readonly<FlankFormOptions> = Object.freeze({
   spindleRpm: 12000,
 });
 
-/** The core's options of `form` (an automatic strip count is left out). */
+/** The core's options of `form` (an automatic strip count and default tool body values are left out). */
 export function flankOptions(form: FlankFormOptions): FlankOptions {
-  const { strips, ...rest } = form;
-  return strips === null ? { ...rest, direction: [...form.direction] } : { ...rest, direction: [...form.direction], strips };
+  const out: Record<string, unknown> = { ...form, direction: [...form.direction] };
+  for (const key of ["strips", "shankRadiusMm", "gaugeLengthMm", "holderRadiusMm"] as const) {
+    if (form[key] === null) delete out[key];
+  }
+  return out as FlankOptions;
 }

@@ -1,4 +1,5 @@
-// The flank options form (strategy "flank"): the conical tool, the machining direction, the
+// The flank options form (strategy "flank"): the conical tool (flutes, shank, gauge length,
+// holder; empty fields keep the core's defaults), the machining direction, the
 // strips, the priority (the CLI's weights presets), the post, feed and spindle. Inputs have the
 // data-testid `opt-flank-<name>`; a field that does not parse is marked and reported instead of
 // planned. Values the core refuses (a negative radius, a zero flute) reach it: its message
@@ -24,6 +25,9 @@ const TOOL: Field[] = [
   { key: "tipRadiusMm", id: "tip", label: "Tip radius", unit: "mm" },
   { key: "topRadiusMm", id: "top", label: "Top radius", unit: "mm" },
   { key: "fluteLengthMm", id: "flute", label: "Flute length", unit: "mm" },
+  { key: "shankRadiusMm", id: "shank", label: "Shank radius", unit: "mm", placeholder: "top radius", hint: "the shank or neck above the flutes" },
+  { key: "gaugeLengthMm", id: "gauge", label: "Gauge length", unit: "mm", placeholder: "3 × flute", hint: "from the tool tip to the holder's face" },
+  { key: "holderRadiusMm", id: "holder", label: "Holder radius", unit: "mm", placeholder: "2 × shank" },
 ];
 const PATH: Field[] = [
   { key: "direction", id: "direction", label: "Direction X,Y,Z", hint: "the strips run along it; the shank points along n × direction" },

@@ -1,6 +1,6 @@
 // The metrics panel of a flank plan: the verifier's figures as a machinist reads them (gouge,
 // material left, RMS, coverage, the kink at every strip boundary), the optimiser's rigidity,
-// holder collisions, A/C flips, the program's length and time, stage timings.
+// the tool body and the collisions flagged, A/C flips, the program's length and time, stage timings.
 
 import type { FlankResult } from "../lib/index";
 import { el } from "./dom";
@@ -18,6 +18,15 @@ function rms(strips: { samples: number; rms_mm: number }[]): number {
   return n > 0 ? Math.sqrt(strips.reduce((s, x) => s + x.samples * x.rms_mm ** 2, 0) / n) : NaN;
 }
 
+/** How many moves are flagged, and the worst one: its kind, the tool part and where. */
+function flagged(collisions: FlankResult["report"]["collisions"]): string {
+  const f = collisions.flagged;
+  if (f.length === 0) return "0";
+  const worst = f.reduce((a, b) => (b.clearance_mm < a.clearance_mm ? b : a));
+  const at = worst.at.map((x) => n1.format(x)).join(", ");
+  return `${n0.format(f.length)} of ${n0.format(collisions.checked_moves)} moves; worst: ${worst.what} on ${worst.kind} move ${worst.move_index}, ${mm(worst.clearance_mm)} at (${at})`;
+}
+
 function rows(plan: FlankResult): Row[] {
   const { report } = plan;
   const v = report.verify;
@@ -31,7 +40,8 @@ function rows(plan: FlankResult): Row[] {
     ["metric-flank-moves", "Program", `${n0.format(output.moves)} moves, cut ${n1.format(output.cut_length_mm)} mm, links ${n1.format(output.link_length_mm)} mm`],
     ["metric-flank-time", "Cutting time", time < 60 ? `${n0.format(time)} s` : `${n1.format(time / 60)} min`],
     ["metric-flank-rigidity", "Rigidity | |b − a| − L |", `${mm(rigidity)} (tolerance ${mm(tolerance)})`, rigidity > tolerance],
-    ["metric-flank-collisions", "Holder / rapid collisions flagged", n0.format(collisions.flagged.length), collisions.flagged.length > 0],
+    ["metric-flank-body", "Shank r / gauge / holder r", `${mm(collisions.tool.shank_radius_mm)} / ${mm(collisions.tool.gauge_length_mm)} / ${mm(collisions.tool.holder_radius_mm)}`],
+    ["metric-flank-collisions", "Collisions flagged (shank, holder, rapids)", flagged(collisions), collisions.flagged.length > 0],
   ];
   if (v === null) return [...common, ["metric-flank-verify", "Verification", "skipped (0 verifier samples)", true]];
   const kinks = v.seams.map((s) => `${s.strips[0]}|${s.strips[1]} ${n3.format(s.envelope_max_kink_deg)}°`);
