@@ -175,3 +175,20 @@ fn garbled_and_truncated_files_give_typed_errors() {
     }
     assert_eq!(step::read(b"solid stl\n").unwrap_err(), StepError::NotStep);
 }
+
+/// One small STEP part (the B-spline face with a hole) planned end to end with the spiral: the
+/// verifier finds the scallop height under the limit and no gouge.
+#[test]
+fn a_trimmed_bspline_part_plans_end_to_end_with_the_verifier_passing() {
+    let text = fx::patch_with_hole();
+    let out = step::load(text.as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
+    let h = 0.02;
+    let options =
+        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    assert!(v.max_scallop_mm <= h, "max scallop {} mm", v.max_scallop_mm);
+    assert_eq!(v.gouges, 0);
+    assert!(p.gcode.lines().count() > 1000);
+}

@@ -166,7 +166,7 @@ fn invert_bspline(s: &nurbs::Surface, p: DVec3, hint: Option<DVec2>) -> DVec2 {
             let r = x - p;
             let (a, b, c) = (su.dot(su), su.dot(sv), sv.dot(sv));
             let det = a * c - b * b;
-            if !(det.abs() > 1e-300) {
+            if det.is_nan() || det.abs() <= 1e-300 {
                 break;
             }
             let (gu, gv) = (su.dot(r), sv.dot(r));
@@ -260,7 +260,7 @@ impl Curve {
                 for _ in 0..30 {
                     let (x, d) = c.eval(t);
                     let den = d.length_squared();
-                    if !(den > 1e-300) {
+                    if den.is_nan() || den <= 1e-300 {
                         break;
                     }
                     let step = (x - p).dot(d) / den;

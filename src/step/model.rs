@@ -125,9 +125,8 @@ impl Reader<'_> {
                 let op = Params::new(oe, orec, 5)?;
                 let edge_id = op.reference(3)?;
                 let forward = op.boolean(4)?;
-                if !edges.contains_key(&edge_id) {
-                    let edge = self.edge(edge_id, vertices)?;
-                    edges.insert(edge_id, edge);
+                if let std::collections::btree_map::Entry::Vacant(slot) = edges.entry(edge_id) {
+                    slot.insert(self.edge(edge_id, vertices)?);
                 }
                 list.push((edge_id, forward));
             }
@@ -266,7 +265,7 @@ impl Reader<'_> {
                     w.push(as_real(x).ok_or_else(|| bad(id, "a weight is not a number"))?);
                 }
             }
-            if w.len() != poles.len() || w.iter().any(|x| !(*x > 0.0)) {
+            if w.len() != poles.len() || w.iter().any(|x| x.is_nan() || *x <= 0.0) {
                 return Err(bad(id, "weights must be positive, one per control point"));
             }
         }
@@ -292,7 +291,7 @@ impl Reader<'_> {
             let mut weights = Vec::new();
             if let Some(rr) = e.record("RATIONAL_B_SPLINE_CURVE") {
                 weights = Params::new(id, rr, 1)?.reals(0)?;
-                if weights.len() != poles.len() || weights.iter().any(|x| !(*x > 0.0)) {
+                if weights.len() != poles.len() || weights.iter().any(|x| x.is_nan() || *x <= 0.0) {
                     return Err(bad(id, "weights must be positive, one per control point"));
                 }
             }

@@ -291,7 +291,6 @@ fn mesh_face(
     let (ulo, uhi) = outer_loop
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(uv[i as usize].x), b.max(uv[i as usize].x)));
-    let mut uv = uv;
     let mut holes = Vec::new();
     for (k, (_, l)) in loops.iter().enumerate() {
         if k == outer {

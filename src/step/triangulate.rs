@@ -97,7 +97,7 @@ pub fn ear_clip(q: &[DVec2], outer: &[u32], holes: &[Vec<u32>]) -> Result<Vec<[u
             let (ia, ib, ic) = (poly[(i + n - 1) % n], poly[i], poly[(i + 1) % n]);
             let (a, b, c) = (q[ia as usize], q[ib as usize], q[ic as usize]);
             let area = orient(a, b, c);
-            if !(area > 1e-14 * (b - a).length_squared().max((c - b).length_squared())) {
+            if area.is_nan() || area <= 1e-14 * (b - a).length_squared().max((c - b).length_squared()) {
                 return false;
             }
             poly.iter().all(|&j| {
@@ -223,9 +223,8 @@ pub fn refine(
                 .unwrap_or(0);
             let e = key(t[k], t[(k + 1) % 3]);
             if uses[&e] == 2 {
-                if !split.contains_key(&e) {
-                    let m = add(d, 0.5 * (d.uv[e.0 as usize] + d.uv[e.1 as usize]));
-                    split.insert(e, m);
+                if let std::collections::hash_map::Entry::Vacant(slot) = split.entry(e) {
+                    slot.insert(add(d, 0.5 * (d.uv[e.0 as usize] + d.uv[e.1 as usize])));
                 }
             } else {
                 centroid.push(ti);
