@@ -12,7 +12,6 @@
 //! 3. [`triangulate`] meshes the domain to the tolerance; triangles are wound so their normal
 //!    is the face's (the surface normal, reversed when the face's `same_sense` is false).
 
-use super::geom::Surface;
 use super::model::{Face, Model};
 use super::triangulate::{self, Domain, Failure};
 use super::{FaceInfo, StepError, StepOptions};
@@ -319,7 +318,7 @@ fn mesh_face(
         message: match e {
             Failure::NoEar => "its trimming loops cross or are degenerate in the surface's parameters".into(),
             Failure::NoBridge => "a hole cannot be joined to the outer loop (loops cross?)".into(),
-            Failure::Budget => format!("more than {budget} triangles would be needed for the chordal tolerance"),
+            Failure::Budget => format!("the tolerance is not reached within 60 refinement rounds and {budget} triangles"),
         },
     };
     let mut tris = triangulate::ear_clip(&q, &outer_loop, &holes).map_err(fail)?;
@@ -330,9 +329,4 @@ fn mesh_face(
     };
     let err = triangulate::refine(&mut dom, &mut tris, tol, max_edge, budget, &eval).map_err(fail)?;
     Ok((tris, global, dom, err))
-}
-
-/// The surface of a face (re-exported for tests that evaluate it).
-pub fn surface_of(model: &Model, face: u64) -> Option<&Surface> {
-    model.faces.iter().find(|f| f.id == face).map(|f| &f.surface)
 }
