@@ -8,6 +8,7 @@
 //! | stage | module | status |
 //! |---|---|---|
 //! | STL → welded, validated surface | [`mesh`] | implemented |
+//! | STEP → exact faces → face-tagged surface | [`step`] | implemented |
 //! | analytic test surfaces | [`fixtures`] | implemented |
 //! | conformal flattening S → S^F (BFF) | [`flatten`] | implemented |
 //! | conformal slit map S^F → disk/annulus with slits, inverse map | [`slitmap`] | implemented |
@@ -42,6 +43,7 @@ pub mod plan;
 pub mod slitmap;
 pub mod spacing;
 pub mod spiral;
+pub mod step;
 pub mod toolpath;
 pub mod verify;
 

@@ -92,7 +92,7 @@
 //! interpolation ([`InverseMap`], seed 000 §2.1); [`SlitMap::log_polar_corners`] gives the
 //! log-polar coordinates (arg w, |w|) of seed 000 eq. 7 per triangle corner.
 
-mod delaunay;
+pub(crate) mod delaunay;
 mod inverse;
 mod untangle;
 

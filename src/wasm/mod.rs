@@ -89,6 +89,68 @@ impl JsMeshOptions {
     }
 }
 
+/// STEP options as the page passes them (camelCase, all optional; unknown fields are an error).
+#[derive(Debug, Default, Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+struct JsStepOptions {
+    chordal_tol_mm: Option<f64>,
+    max_edge_mm: Option<f64>,
+    faces: Option<Vec<u64>>,
+    max_triangles: Option<usize>,
+}
+
+impl JsStepOptions {
+    const FIELDS: [&'static str; 4] = ["chordalTolMm", "maxEdgeMm", "faces", "maxTriangles"];
+
+    fn parse(options: JsValue) -> Result<crate::step::StepOptions, JsError> {
+        if options.is_undefined() || options.is_null() {
+            return Ok(crate::step::StepOptions::default());
+        }
+        reject_unknown_fields(&options, &Self::FIELDS, "STEP")?;
+        let js: JsStepOptions =
+            serde_wasm_bindgen::from_value(options).map_err(|e| JsError::new(&format!("invalid STEP options: {e}")))?;
+        let d = crate::step::StepOptions::default();
+        Ok(crate::step::StepOptions {
+            chordal_tol_mm: js.chordal_tol_mm.unwrap_or(d.chordal_tol_mm),
+            max_edge_mm: js.max_edge_mm.or(d.max_edge_mm),
+            faces: js.faces.or(d.faces),
+            max_triangles: js.max_triangles.unwrap_or(d.max_triangles),
+        })
+    }
+}
+
+/// Whether the bytes are a STEP file (so the page can choose `Planner.fromStep`).
+#[wasm_bindgen(js_name = isStep)]
+pub fn is_step(bytes: &[u8]) -> bool {
+    crate::step::is_step(bytes)
+}
+
+/// The faces of a STEP file, tessellated: `{faces: [{id, surface, surfaceId, loops, areaMm2,
+/// triangles, adjacent}], positions, triangles, faceOfTriangle, chordalErrorMm}` (snake_case
+/// keys as serde writes them), for the page to show and pick faces. `stepOptions` as in
+/// `Planner.fromStep`.
+#[wasm_bindgen(js_name = stepFaces)]
+pub fn step_faces(step: &[u8], step_options: JsValue) -> Result<JsValue, JsError> {
+    init();
+    let o = JsStepOptions::parse(step_options)?;
+    let (_, t, _) = crate::step::read_and_tessellate(step, &o, &now).map_err(js_err)?;
+    #[derive(Serialize)]
+    struct Faces {
+        faces: Vec<crate::step::FaceInfo>,
+        positions: Vec<f32>,
+        triangles: Vec<u32>,
+        face_of_triangle: Vec<u64>,
+        chordal_error_mm: f64,
+    }
+    to_js(&Faces {
+        faces: t.faces,
+        positions: t.positions.iter().flat_map(|v| v.as_vec3().to_array()).collect(),
+        triangles: t.triangles.iter().flatten().copied().collect(),
+        face_of_triangle: t.face_of_triangle,
+        chordal_error_mm: t.chordal_error_mm,
+    })
+}
+
 /// One loaded part: the mesh stage's output and the reusable planner (flattening and
 /// factorisations), built on first use, and the last plan.
 #[wasm_bindgen]
@@ -251,6 +313,18 @@ impl Planner {
         init();
         let options = JsMeshOptions::parse(options)?;
         let output = mesh::load_with_progress(stl, &options, &mut progress(&on_progress)).map_err(js_err)?;
+        Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
+    }
+
+    /// Reads a STEP file (its selected faces, tessellated to the chordal tolerance) instead of
+    /// an STL. `options` as for the constructor; `stepOptions` is `undefined` or `{chordalTolMm?,
+    /// maxEdgeMm?, faces?: number[], maxTriangles?}`. Throws an `Error` naming the `#id` at fault.
+    #[wasm_bindgen(js_name = fromStep)]
+    pub fn from_step(step: &[u8], options: JsValue, step_options: JsValue) -> Result<Planner, JsError> {
+        init();
+        let options = JsMeshOptions::parse(options)?;
+        let step_options = JsStepOptions::parse(step_options)?;
+        let output = crate::step::load(step, &step_options, &options, &now).map_err(js_err)?.mesh;
         Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
     }
 

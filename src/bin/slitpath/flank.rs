@@ -4,7 +4,8 @@
 use glam::DVec3;
 use slitpath::flank::{self, ConeTool, FlankOptions, Weights};
 use slitpath::gcode::Post;
-use slitpath::mesh::{self, MeshOptions};
+use slitpath::mesh::MeshOptions;
+use slitpath::step::StepOptions;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -143,14 +144,13 @@ pub fn options(a: &FlankArgs) -> Result<FlankOptions, String> {
 }
 
 /// Reads, plans and returns the program and the report JSON.
-pub fn run(a: &FlankArgs, mesh_options: &MeshOptions) -> Result<(String, String), String> {
+pub fn run(a: &FlankArgs, mesh_options: &MeshOptions, step_options: &StepOptions) -> Result<(String, String), String> {
     let options = options(a)?;
     let started = Instant::now();
     let now = || started.elapsed().as_secs_f64() * 1e3;
-    let bytes = std::fs::read(&a.part).map_err(|e| format!("cannot read {}: {e}", a.part.display()))?;
     let name = a.part.display();
-    let mesh = mesh::load(&bytes, mesh_options).map_err(|e| format!("{name}: {e}"))?;
+    let (mesh, step) = crate::part::load(&a.part, mesh_options, step_options, &now)?;
     let plan = flank::plan(&mesh.surface, &options, &mut |_, _, _| {}, &now).map_err(|e| format!("{name}: {e}"))?;
-    let json = serde_json::to_string_pretty(&plan.report).map_err(|e| e.to_string())?;
+    let json = crate::part::report_json(&plan.report, step.as_ref())?;
     Ok((plan.gcode, json))
 }

@@ -9,6 +9,10 @@
 //! - `flank PART.stl --tip-radius … --top-radius … --flute-length … --direction X,Y,Z [--strips N]
 //!   [--weights accuracy|g1|W2,W3] --post ac|cl -o OUT [--report R.json]`: 5-axis flank milling
 //!   with a conical tool (seed 002); `--axis` gives the tool's side of an open surface.
+//! - `faces PART.step [--json]`: the STEP faces, their surface types, areas and neighbours.
+//!
+//! Every command that reads a part takes STL or STEP (by content or a `.step`/`.stp` name);
+//! for STEP, `--faces 12,13` chooses the faces and `--chordal-tol-mm` the tessellation.
 //! - `fixture NAME -o FILE.stl`: writes one of the analytic test surfaces as binary STL.
 //!
 //! Errors go to stderr as one line and the exit code is non-zero; no panic reaches the user.
@@ -23,6 +27,8 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 mod flank;
 #[cfg(not(target_arch = "wasm32"))]
 mod map;
+#[cfg(not(target_arch = "wasm32"))]
+mod part;
 #[cfg(not(target_arch = "wasm32"))]
 mod plan;
 #[cfg(not(target_arch = "wasm32"))]
@@ -144,7 +150,16 @@ mod cli {
             #[command(flatten)]
             mesh: MeshArgs,
         },
-        /// Writes an analytic test surface as binary STL.
+        /// Lists the faces of a STEP file: id, surface type, area, loops, adjacent faces.
+        Faces {
+            part: PathBuf,
+            /// Print exactly one JSON object on stdout.
+            #[arg(long)]
+            json: bool,
+            #[command(flatten)]
+            mesh: MeshArgs,
+        },
+        /// Writes an analytic test surface as binary STL (or STEP: step:NAME, see --list).
         Fixture {
             /// One of the fixture names (see `slitpath fixture --list`).
             #[arg(required_unless_present = "list")]
@@ -168,6 +183,13 @@ mod cli {
         /// Maximum number of triangles accepted.
         #[arg(long, default_value_t = mesh::MeshOptions::default().max_triangles)]
         max_triangles: usize,
+        /// STEP input: the faces to machine, by id (`12,13,…`; default: all, when they form one
+        /// open surface). `slitpath faces PART.step` lists them.
+        #[arg(long)]
+        faces: Option<String>,
+        /// STEP input: largest distance between the facets and the exact surfaces, mm.
+        #[arg(long, default_value_t = slitpath::step::StepOptions::default().chordal_tol_mm)]
+        chordal_tol_mm: f64,
     }
 
     impl MeshArgs {
@@ -178,6 +200,14 @@ mod cli {
                 max_triangles: self.max_triangles,
                 ..Default::default()
             }
+        }
+
+        pub fn step_options(&self) -> Result<slitpath::step::StepOptions, String> {
+            Ok(slitpath::step::StepOptions {
+                chordal_tol_mm: self.chordal_tol_mm,
+                faces: self.faces.as_deref().map(crate::part::parse_faces).transpose()?,
+                ..Default::default()
+            })
         }
     }
 
@@ -193,18 +223,26 @@ mod cli {
         let cli = Cli::parse();
         match cli.command {
             Command::Info { part, json, mesh: args } => {
-                let bytes = std::fs::read(&part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
-                let out = mesh::load(&bytes, &args.options()).map_err(|e| format!("{}: {e}", part.display()))?;
+                let (out, step) = crate::part::load(&part, &args.options(), &args.step_options()?, &|| 0.0)?;
                 if json {
-                    println!("{}", serde_json::to_string(&out.report).map_err(|e| e.to_string())?);
+                    let text = crate::part::report_json(&out.report, step.as_ref())?;
+                    println!("{}", serde_json::from_str::<serde_json::Value>(&text).map_err(|e| e.to_string())?);
                 } else {
                     print_report(&part.display().to_string(), &out.report);
+                    if let Some(s) = step {
+                        let ids: Vec<String> = s.faces.iter().map(|f| format!("#{} {}", f.id, f.surface)).collect();
+                        println!("STEP faces: {}", ids.join(", "));
+                        println!(
+                            "chordal error {:.5} mm (tolerance {} mm), unit {}",
+                            s.chordal_error_mm, s.chordal_tol_mm, s.unit
+                        );
+                    }
                 }
                 Ok(())
             }
+            Command::Faces { part, json, mesh: args } => crate::part::print_faces(&part, &args.step_options()?, json),
             Command::Map { part, pole, pole_3d, json, svg, mesh: args } => {
-                let bytes = std::fs::read(&part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
-                let out = mesh::load(&bytes, &args.options()).map_err(|e| format!("{}: {e}", part.display()))?;
+                let (out, _) = crate::part::load(&part, &args.options(), &args.step_options()?, &|| 0.0)?;
                 let pole = match (pole, pole_3d) {
                     (_, Some(p)) => crate::map::PoleChoice::Point3d(glam::DVec3::from_array(p)),
                     (Some(p), None) => p,
@@ -261,7 +299,7 @@ mod cli {
                     optimise: &optimise,
                     alpha,
                 })?;
-                let (gcode, json) = crate::plan::run(&part, &args.options(), &options)?;
+                let (gcode, json) = crate::plan::run(&part, &args.options(), &args.step_options()?, &options)?;
                 write(&output, gcode.as_bytes())?;
                 if let Some(report) = report {
                     write(&report, json.as_bytes())?;
@@ -269,7 +307,7 @@ mod cli {
                 Ok(())
             }
             Command::Flank { args, mesh: m } => {
-                let (program, json) = crate::flank::run(&args, &m.options())?;
+                let (program, json) = crate::flank::run(&args, &m.options(), &m.step_options()?)?;
                 write(&args.output, program.as_bytes())?;
                 if let Some(report) = &args.report {
                     write(report, json.as_bytes())?;
@@ -281,10 +319,17 @@ mod cli {
                 fixtures::FLANK_NAMES.iter().for_each(|n| println!("{n}  (a flank-milling surface)"));
                 println!("gen:SEED[:FACES]  (a generated part: outline, relief, holes and meshing drawn from SEED)");
                 println!("panel:EDGE_MM     (the 120 × 80 mm panel with six holes: 0.75 ≈ 40k faces, 0.275 ≈ 300k)");
+                fixtures::step::NAMES.iter().for_each(|n| println!("step:{n}  (a STEP file of exact faces)"));
                 Ok(())
             }
             Command::Fixture { name, output, .. } => {
                 let (name, output) = (name.expect("required by clap"), output.expect("required by clap"));
+                if let Some(step_name) = name.strip_prefix("step:") {
+                    let text = fixtures::step::by_name(step_name).ok_or_else(|| {
+                        format!("unknown STEP fixture `{step_name}`; known: {}", fixtures::step::NAMES.join(", "))
+                    })?;
+                    return write(&output, text.as_bytes());
+                }
                 let mesh = fixtures::by_name(&name).ok_or_else(|| {
                     format!(
                         "unknown fixture `{name}`; known: {}, gen:SEED[:FACES], panel:EDGE_MM",

@@ -1,11 +1,12 @@
-//! `slitpath plan`: the whole pipeline from an STL to G-code, with the JSON report.
+//! `slitpath plan`: the whole pipeline from an STL (or STEP) to G-code, with the JSON report.
 
 use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
-use slitpath::mesh::{self, MeshOptions};
+use slitpath::mesh::MeshOptions;
 use slitpath::origin::OriginChoice;
 use slitpath::plan::{Facets, Optimise, PlanOptions, Planner};
 use slitpath::spiral::{Cut, Direction};
+use slitpath::step::StepOptions;
 use slitpath::toolpath::Axes;
 use std::path::Path;
 use std::time::Instant;
@@ -103,12 +104,16 @@ pub fn parse_origin(s: &str) -> Result<OriginChoice, String> {
 }
 
 /// Reads, plans and returns the G-code and the report JSON.
-pub fn run(part: &Path, mesh_options: &MeshOptions, options: &PlanOptions) -> Result<(String, String), String> {
+pub fn run(
+    part: &Path,
+    mesh_options: &MeshOptions,
+    step_options: &StepOptions,
+    options: &PlanOptions,
+) -> Result<(String, String), String> {
     let started = Instant::now();
     let now = || started.elapsed().as_secs_f64() * 1e3;
-    let bytes = std::fs::read(part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
     let name = part.display();
-    let mesh = mesh::load(&bytes, mesh_options).map_err(|e| format!("{name}: {e}"))?;
+    let (mesh, step) = crate::part::load(part, mesh_options, step_options, &now)?;
     let t_read = now();
     let planner = Planner::new(mesh, &now).map_err(|e| format!("{name}: {e}"))?;
     let mut plan = planner.plan(options, &mut |_, _, _| {}, &now).map_err(|e| format!("{name}: {e}"))?;
@@ -117,6 +122,6 @@ pub fn run(part: &Path, mesh_options: &MeshOptions, options: &PlanOptions) -> Re
     for warning in &plan.report.warnings {
         eprintln!("warning: {name}: {warning}");
     }
-    let json = serde_json::to_string_pretty(&plan.report).map_err(|e| e.to_string())?;
+    let json = crate::part::report_json(&plan.report, step.as_ref())?;
     Ok((plan.gcode, json))
 }

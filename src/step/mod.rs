@@ -1,0 +1,212 @@
+//! Stage 1 for CAD input — `step`: STEP bytes (AP203/AP214/AP242) → exact faces → a welded,
+//! face-tagged triangle mesh → the planner's [`Surface`](crate::mesh::Surface).
+//!
+//! What it computes (issue 36 item 1; `docs/step.md` for the choice of a reader of our own over
+//! the crates):
+//! 1. [`parse`]: the DATA section of an ISO 10303-21 file into an instance table.
+//! 2. [`model`]: faces with their exact surfaces (planes, cylinders, cones, spheres, tori,
+//!    rational and polynomial B-splines), bounds and edges, in millimetres (length units read).
+//! 3. [`tessellate`]: edges sampled once and shared by the faces on both sides (so adjacent faces
+//!    give one manifold mesh), every face meshed in its parameter domain with its holes until each
+//!    facet is within the chordal tolerance of the surface; each triangle tagged with its face.
+//! 4. [`load`]: the selected faces' mesh through [`mesh::from_triangles`] (the STL path from
+//!    there on), refused unless it is one open surface.
+//!
+//! Preconditions: faces are ADVANCED_FACEs; a face on a periodic surface has a seam edge where
+//! its loop goes round (as OpenCascade writes it). Invariants of the output: triangles of a face
+//! are wound with the face's normal; vertices on a shared edge are the same vertex in both faces.
+//! Bad input never panics: every fault is a [`StepError`] naming the `#id` at fault.
+
+pub mod geom;
+pub mod model;
+pub mod nurbs;
+pub mod parse;
+pub mod tessellate;
+pub mod triangulate;
+
+use crate::mesh::{self, MeshOptions, MeshOutput, TriMesh};
+use serde::Serialize;
+
+pub use model::Model;
+pub use tessellate::Tessellation;
+
+/// Options of the STEP stage. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepOptions {
+    /// Largest distance between a facet (or an edge's chord) and the exact surface, mm.
+    /// Default 0.01 mm: half the planner's default scallop limit of 0.02 mm.
+    pub chordal_tol_mm: f64,
+    /// Longest facet edge, mm; `None` = 1/50 of the model's bounding-box diagonal (the slit map
+    /// needs vertices inside flat faces too). Default `None`.
+    pub max_edge_mm: Option<f64>,
+    /// Faces to tessellate, by STEP id; `None` = all. Default `None`.
+    pub faces: Option<Vec<u64>>,
+    /// Refused above this many triangles. Default 2 000 000.
+    pub max_triangles: usize,
+}
+
+impl Default for StepOptions {
+    fn default() -> Self {
+        Self { chordal_tol_mm: 0.01, max_edge_mm: None, faces: None, max_triangles: 2_000_000 }
+    }
+}
+
+/// Everything that can be wrong with a STEP input. Variants carry the `#id` (or line) at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StepError {
+    #[error("not a STEP file (it does not start with ISO-10303-21;)")]
+    NotStep,
+    #[error("truncated STEP file at line {line}{}: {message}", at(*id))]
+    Truncated { id: Option<u64>, line: usize, message: String },
+    #[error("STEP syntax error at line {line}{}: {message}", at(*id))]
+    Syntax { id: Option<u64>, line: usize, message: String },
+    #[error("#{id}: {message}")]
+    Entity { id: u64, message: String },
+    #[error("#{id}: {entity} is not supported")]
+    Unsupported { id: u64, entity: String },
+    #[error("the STEP file has no ADVANCED_FACE")]
+    NoFaces,
+    #[error("there is no face #{id}; the faces are {}", list(faces))]
+    UnknownFace { id: u64, faces: Vec<u64> },
+    #[error("face #{face} cannot be tessellated: {message}")]
+    Tessellation { face: u64, message: String },
+    #[error("tessellating up to face #{face} gives more than {cap} triangles: raise the chordal tolerance")]
+    TooManyTriangles { face: u64, cap: usize },
+    #[error(
+        "the faces {} do not form one open surface ({reason}); choose faces with --faces (see `slitpath faces`)",
+        list(faces)
+    )]
+    NotOneSurface { faces: Vec<u64>, reason: String },
+    #[error("invalid STEP option: {0}")]
+    InvalidOption(String),
+    #[error("{0}")]
+    Mesh(#[from] mesh::MeshError),
+}
+
+fn at(id: Option<u64>) -> String {
+    id.map_or(String::new(), |i| format!(" (instance #{i})"))
+}
+
+fn list(ids: &[u64]) -> String {
+    ids.iter().map(|i| format!("#{i}")).collect::<Vec<_>>().join(", ")
+}
+
+/// One face as the report lists it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FaceInfo {
+    /// The ADVANCED_FACE's id.
+    pub id: u64,
+    /// `plane`, `cylinder`, `cone`, `sphere`, `torus`, `b-spline` or `rational b-spline`.
+    pub surface: String,
+    pub surface_id: u64,
+    /// Number of edge loops (1 + holes).
+    pub loops: usize,
+    /// Area of its facets, mm².
+    pub area_mm2: f64,
+    pub triangles: usize,
+    /// Faces sharing an edge with it (all faces of the file, selected or not).
+    pub adjacent: Vec<u64>,
+}
+
+/// The `step` section of the reports.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepReport {
+    /// All faces of the file, in id order.
+    pub faces_in_file: Vec<u64>,
+    /// The faces tessellated (and planned), with their figures.
+    pub faces: Vec<FaceInfo>,
+    /// Millimetres per file unit, and the unit's name.
+    pub unit_mm: f64,
+    pub unit: String,
+    pub chordal_tol_mm: f64,
+    /// The largest facet-to-surface distance measured over the tessellation, mm.
+    pub chordal_error_mm: f64,
+    pub triangles: usize,
+    pub read_ms: f64,
+    pub tessellate_ms: f64,
+}
+
+/// The result of [`load`]: the planner's input and the STEP report.
+#[derive(Clone, Debug)]
+pub struct StepOutput {
+    pub mesh: MeshOutput,
+    pub step: StepReport,
+    /// The STEP face of each triangle of `mesh.surface` (the mesh stage keeps the triangle order
+    /// of one open component, checked by [`load`]).
+    pub face_of_triangle: Vec<u64>,
+}
+
+/// Whether `bytes` look like a STEP file (the ISO 10303-21 magic after any leading blanks).
+pub fn is_step(bytes: &[u8]) -> bool {
+    let start = bytes.iter().position(|c| !c.is_ascii_whitespace()).unwrap_or(bytes.len());
+    bytes[start..].len() >= 12 && bytes[start..start + 12].eq_ignore_ascii_case(b"ISO-10303-21")
+}
+
+/// Reads the B-rep of a STEP file.
+pub fn read(bytes: &[u8]) -> Result<Model, StepError> {
+    model::decode(&parse::parse(bytes)?)
+}
+
+fn check_options(o: &StepOptions) -> Result<(), StepError> {
+    if !(o.chordal_tol_mm.is_finite() && o.chordal_tol_mm > 0.0) {
+        return Err(StepError::InvalidOption(format!("chordal tolerance {} mm must be positive", o.chordal_tol_mm)));
+    }
+    if let Some(e) = o.max_edge_mm {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(StepError::InvalidOption(format!("maximum edge {e} mm must be positive")));
+        }
+    }
+    Ok(())
+}
+
+/// Reads and tessellates (no mesh checks): what `slitpath faces` shows.
+pub fn read_and_tessellate(
+    bytes: &[u8],
+    o: &StepOptions,
+    now: &dyn Fn() -> f64,
+) -> Result<(Model, Tessellation, [f64; 2]), StepError> {
+    check_options(o)?;
+    let t0 = now();
+    let model = read(bytes)?;
+    let t1 = now();
+    let tess = tessellate::tessellate(&model, o.faces.as_deref(), o)?;
+    Ok((model, tess, [t1 - t0, now() - t1]))
+}
+
+/// STEP bytes → the planner's surface and the STEP report. `now` gives milliseconds.
+pub fn load(
+    bytes: &[u8],
+    o: &StepOptions,
+    mesh_options: &MeshOptions,
+    now: &dyn Fn() -> f64,
+) -> Result<StepOutput, StepError> {
+    let (model, tess, [read_ms, tessellate_ms]) = read_and_tessellate(bytes, o, now)?;
+    let selected: Vec<u64> = tess.faces.iter().map(|f| f.id).collect();
+    let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
+    let out = mesh::from_triangles(&trimesh, mesh_options)?;
+    let r = &out.report;
+    let reason = if r.closed {
+        Some("they enclose a solid".to_string())
+    } else if r.components > 1 {
+        Some(format!("{} separate pieces", r.components))
+    } else if out.surface.triangles.len() != tess.triangles.len() {
+        Some(format!("{} degenerate and {} duplicate facets", r.degenerate_faces_dropped, r.duplicate_faces_dropped))
+    } else {
+        None
+    };
+    if let Some(reason) = reason {
+        return Err(StepError::NotOneSurface { faces: selected, reason });
+    }
+    let step = StepReport {
+        faces_in_file: model.faces.iter().map(|f| f.id).collect(),
+        faces: tess.faces,
+        unit_mm: model.unit_mm,
+        unit: model.unit_name.clone(),
+        chordal_tol_mm: o.chordal_tol_mm,
+        chordal_error_mm: tess.chordal_error_mm,
+        triangles: tess.triangles.len(),
+        read_ms,
+        tessellate_ms,
+    };
+    Ok(StepOutput { mesh: out, step, face_of_triangle: tess.face_of_triangle })
+}

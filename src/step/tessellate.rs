@@ -1,0 +1,332 @@
+//! B-rep → one triangle mesh, each triangle tagged with its face, adjacent faces sharing the
+//! vertices of their common edges (so the mesh is welded by construction).
+//!
+//! 1. Every edge used by a selected face is sampled once in 3D: its curve between its end
+//!    vertices, split in halves while the chord strays more than half the chordal tolerance from the
+//!    curve's midpoint or is longer than the edge limit (a curved edge at least in four). The end
+//!    samples are the vertices themselves.
+//! 2. Each face's loops are chains of these samples; each sample is inverted onto the surface
+//!    (closed form for analytic surfaces, Newton for B-splines). Angle parameters are unwrapped
+//!    along the loop, so a seam edge used twice gives the two sides of the parameter rectangle;
+//!    a loop that winds once round a periodic surface cannot be a planar domain and is refused.
+//! 3. [`triangulate`] meshes the domain to the tolerance; triangles are wound so their normal
+//!    is the face's (the surface normal, reversed when the face's `same_sense` is false).
+
+use super::model::{Face, Model};
+use super::triangulate::{self, Domain, Failure};
+use super::{FaceInfo, StepError, StepOptions};
+use crate::num;
+use glam::{DVec2, DVec3};
+use std::collections::{BTreeMap, BTreeSet};
+use std::f64::consts::TAU;
+
+/// The tessellation: a welded mesh, the face of each triangle, the faces' figures.
+#[derive(Clone, Debug)]
+pub struct Tessellation {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// The STEP id of each triangle's ADVANCED_FACE.
+    pub face_of_triangle: Vec<u64>,
+    pub faces: Vec<FaceInfo>,
+    /// The largest facet-to-surface distance measured (mm).
+    pub chordal_error_mm: f64,
+}
+
+/// Tessellates the faces of `model` whose ids are in `selected` (all when `None`).
+pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> Result<Tessellation, StepError> {
+    let faces: Vec<&Face> = match selected {
+        None => model.faces.iter().collect(),
+        Some(ids) => {
+            let mut out = Vec::new();
+            for id in ids {
+                let f = model.faces.iter().find(|f| f.id == *id).ok_or_else(|| StepError::UnknownFace {
+                    id: *id,
+                    faces: model.faces.iter().map(|f| f.id).collect(),
+                })?;
+                if !out.iter().any(|g: &&Face| g.id == f.id) {
+                    out.push(f);
+                }
+            }
+            out
+        }
+    };
+    let diagonal = {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in model.vertices.values() {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        (hi - lo).length().max(1e-9)
+    };
+    let max_edge = o.max_edge_mm.unwrap_or(diagonal / 50.0);
+    let tol = o.chordal_tol_mm;
+
+    // 1. Edge samples, shared.
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut vertex_index: BTreeMap<u64, u32> = BTreeMap::new();
+    let mut edge_samples: BTreeMap<u64, Vec<u32>> = BTreeMap::new();
+    for f in &faces {
+        for b in &f.bounds {
+            for &(e, _) in &b.edges {
+                if edge_samples.contains_key(&e) {
+                    continue;
+                }
+                let edge = &model.edges[&e];
+                let mut ids = Vec::new();
+                for v in [edge.start, edge.end] {
+                    let next = positions.len() as u32;
+                    let i = *vertex_index.entry(v).or_insert(next);
+                    if i == next {
+                        positions.push(model.vertices[&v]);
+                    }
+                    ids.push(i);
+                }
+                let (a, b) = (model.vertices[&edge.start], model.vertices[&edge.end]);
+                let closed = edge.start == edge.end;
+                // Sample in the curve's direction, then turn to the edge's.
+                let (from, to) = if edge.same_sense { (a, b) } else { (b, a) };
+                let (t0, t1) = edge.curve.span(from, to, closed);
+                let min_depth = if matches!(edge.curve, super::geom::Curve::Line { .. }) { 0 } else { 2 };
+                let mut inner = Vec::new();
+                // Half the tolerance: the facets along the edge then have room for the surface's own bulge.
+                subdivide(&|t| edge.curve.point(t), t0, from, t1, to, 0.5 * tol, max_edge, min_depth, 0, &mut inner);
+                if !edge.same_sense {
+                    inner.reverse();
+                }
+                let mut list = vec![ids[0]];
+                for p in inner {
+                    list.push(positions.len() as u32);
+                    positions.push(p);
+                }
+                list.push(ids[1]);
+                edge_samples.insert(e, list);
+            }
+        }
+    }
+
+    // 2–3. Faces.
+    let mut triangles = Vec::new();
+    let mut face_of_triangle = Vec::new();
+    let mut infos = Vec::new();
+    let mut chordal = 0.0f64;
+    let budget = o.max_triangles;
+    for f in &faces {
+        let (tris, local_to_global, dom, err) = mesh_face(f, &edge_samples, &positions, tol, max_edge, budget)?;
+        chordal = chordal.max(err);
+        let mut global: Vec<u32> = local_to_global;
+        for p in &dom.p[global.len()..] {
+            global.push(positions.len() as u32);
+            positions.push(*p);
+        }
+        let mut area = 0.0;
+        for t in &tris {
+            let g = t.map(|i| global[i as usize]);
+            let g = if f.same_sense { g } else { [g[0], g[2], g[1]] };
+            let [a, b, c] = g.map(|i| positions[i as usize]);
+            area += 0.5 * (b - a).cross(c - a).length();
+            triangles.push(g);
+            face_of_triangle.push(f.id);
+        }
+        if triangles.len() > budget {
+            return Err(StepError::TooManyTriangles { face: f.id, cap: budget });
+        }
+        infos.push(FaceInfo {
+            id: f.id,
+            surface: f.surface.kind().to_string(),
+            surface_id: f.surface_id,
+            loops: f.bounds.len(),
+            area_mm2: area,
+            triangles: tris.len(),
+            adjacent: Vec::new(),
+        });
+    }
+    // Adjacency: faces sharing an edge.
+    let mut users: BTreeMap<u64, BTreeSet<u64>> = BTreeMap::new();
+    for f in &model.faces {
+        for b in &f.bounds {
+            for &(e, _) in &b.edges {
+                users.entry(e).or_default().insert(f.id);
+            }
+        }
+    }
+    for info in &mut infos {
+        let f = model.faces.iter().find(|f| f.id == info.id).expect("selected from the model");
+        let mut adj = BTreeSet::new();
+        for b in &f.bounds {
+            for &(e, _) in &b.edges {
+                adj.extend(users[&e].iter().filter(|&&g| g != f.id));
+            }
+        }
+        info.adjacent = adj.into_iter().collect();
+    }
+    Ok(Tessellation { positions, triangles, face_of_triangle, faces: infos, chordal_error_mm: chordal })
+}
+
+/// Appends the inner samples of the curve between parameters `t0` and `t1` to `out`.
+#[allow(clippy::too_many_arguments)]
+fn subdivide(
+    c: &dyn Fn(f64) -> DVec3,
+    t0: f64,
+    p0: DVec3,
+    t1: f64,
+    p1: DVec3,
+    tol: f64,
+    max_edge: f64,
+    min_depth: usize,
+    depth: usize,
+    out: &mut Vec<DVec3>,
+) {
+    let tm = 0.5 * (t0 + t1);
+    let pm = c(tm);
+    let chord = p1 - p0;
+    let off = {
+        let l2 = chord.length_squared();
+        let s = if l2 > 0.0 { ((pm - p0).dot(chord) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        (pm - (p0 + chord * s)).length()
+    };
+    if depth < 24 && (depth < min_depth || off > tol || chord.length() > max_edge) {
+        subdivide(c, t0, p0, tm, pm, tol, max_edge, min_depth, depth + 1, out);
+        out.push(pm);
+        subdivide(c, tm, pm, t1, p1, tol, max_edge, min_depth, depth + 1, out);
+    }
+}
+
+type FaceMesh = (Vec<[u32; 3]>, Vec<u32>, Domain, f64);
+
+fn mesh_face(
+    f: &Face,
+    edge_samples: &BTreeMap<u64, Vec<u32>>,
+    positions: &[DVec3],
+    tol: f64,
+    max_edge: f64,
+    budget: usize,
+) -> Result<FaceMesh, StepError> {
+    let s = &f.surface;
+    let periodic = s.periodic();
+    let mut global: Vec<u32> = Vec::new();
+    let mut uv: Vec<DVec2> = Vec::new();
+    let mut loops: Vec<(bool, Vec<u32>)> = Vec::new();
+    for b in &f.bounds {
+        // The chain of global sample ids round the loop, each once.
+        let mut chain: Vec<u32> = Vec::new();
+        for &(e, forward) in &b.edges {
+            let mut list = edge_samples[&e].clone();
+            if !forward {
+                list.reverse();
+            }
+            if let Some(&last) = chain.last() {
+                if last != list[0] {
+                    return Err(StepError::Entity {
+                        id: b.id,
+                        message: format!("edge #{e} does not start where the previous edge of the loop ends"),
+                    });
+                }
+                chain.pop();
+            }
+            chain.extend(list);
+        }
+        if chain.len() > 1 && chain.first() == chain.last() {
+            chain.pop();
+        } else {
+            return Err(StepError::Entity { id: b.id, message: "the loop is not closed".into() });
+        }
+        // Parameters, unwrapped along the loop.
+        let start = uv.len();
+        let mut prev: Option<DVec2> = None;
+        for &g in &chain {
+            let mut w = s.invert(positions[g as usize], prev);
+            if let Some(p) = prev {
+                for d in 0..2 {
+                    if periodic[d] {
+                        w[d] = p[d] + num::wrap_pi(w[d] - p[d]);
+                    }
+                }
+            }
+            prev = Some(w);
+            uv.push(w);
+            global.push(g);
+        }
+        let closing = uv[start] - uv[uv.len() - 1];
+        for d in 0..2 {
+            if periodic[d] && (closing[d] - num::wrap_pi(closing[d])).abs() > 1.0 {
+                return Err(StepError::Entity {
+                    id: b.id,
+                    message: format!("the loop winds round the {} (a face bounded by two such loops, without a seam edge, is not supported)", s.kind()),
+                });
+            }
+        }
+        loops.push((b.outer, (start as u32..uv.len() as u32).collect()));
+    }
+    // Scale the parameters to about millimetres (mean speeds over the domain's box).
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for w in &uv {
+        lo = lo.min(*w);
+        hi = hi.max(*w);
+    }
+    let mut speed = DVec2::ZERO;
+    for i in 0..=4 {
+        for j in 0..=4 {
+            let w = lo + (hi - lo) * DVec2::new(i as f64, j as f64) / 4.0;
+            let (_, su, sv) = s.eval(w);
+            speed += DVec2::new(su.length(), sv.length()) / 25.0;
+        }
+    }
+    let scale = DVec2::new(if speed.x > 1e-12 { speed.x } else { 1.0 }, if speed.y > 1e-12 { speed.y } else { 1.0 });
+    let q: Vec<DVec2> = uv.iter().map(|w| *w * scale).collect();
+    let signed = |l: &[u32]| -> f64 {
+        (0..l.len()).map(|i| q[l[i] as usize].perp_dot(q[l[(i + 1) % l.len()] as usize])).sum::<f64>() * 0.5
+    };
+    // The outer loop: the one marked so, else the largest.
+    let outer = match loops.iter().filter(|l| l.0).count() {
+        1 => loops.iter().position(|l| l.0).unwrap_or(0),
+        _ => (0..loops.len())
+            .max_by(|&a, &b| signed(&loops[a].1).abs().total_cmp(&signed(&loops[b].1).abs()))
+            .unwrap_or(0),
+    };
+    let mut outer_loop = loops[outer].1.clone();
+    if signed(&outer_loop) < 0.0 {
+        outer_loop.reverse();
+    }
+    let (ulo, uhi) = outer_loop
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(uv[i as usize].x), b.max(uv[i as usize].x)));
+    let mut holes = Vec::new();
+    for (k, (_, l)) in loops.iter().enumerate() {
+        if k == outer {
+            continue;
+        }
+        // A hole of a periodic face may sit a turn away from the outer loop.
+        if periodic[0] {
+            let mean = l.iter().map(|&i| uv[i as usize].x).sum::<f64>() / l.len() as f64;
+            let shift = TAU * ((0.5 * (ulo + uhi) - mean) / TAU).round();
+            for &i in l {
+                uv[i as usize].x += shift;
+            }
+        }
+        let mut l = l.clone();
+        let area: f64 =
+            (0..l.len()).map(|i| (uv[l[i] as usize] * scale).perp_dot(uv[l[(i + 1) % l.len()] as usize] * scale)).sum();
+        if area > 0.0 {
+            l.reverse();
+        }
+        holes.push(l);
+    }
+    let q: Vec<DVec2> = uv.iter().map(|w| *w * scale).collect();
+    let p: Vec<DVec3> = global.iter().map(|&g| positions[g as usize]).collect();
+    let fail = |e: Failure| StepError::Tessellation {
+        face: f.id,
+        message: match e {
+            Failure::NoEar => "its trimming loops cross or are degenerate in the surface's parameters".into(),
+            Failure::NoBridge => "a hole cannot be joined to the outer loop (loops cross?)".into(),
+            Failure::Budget => format!("the tolerance is not reached within 60 refinement rounds and {budget} triangles"),
+        },
+    };
+    let mut tris = triangulate::ear_clip(&q, &outer_loop, &holes).map_err(fail)?;
+    let mut dom = Domain { q, uv, p, scale };
+    let eval = |w: DVec2| {
+        let (x, su, sv) = s.eval(w);
+        (x, su.cross(sv).normalize_or_zero())
+    };
+    let err = triangulate::refine(&mut dom, &mut tris, tol, max_edge, budget, &eval).map_err(fail)?;
+    Ok((tris, global, dom, err))
+}

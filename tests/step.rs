@@ -1,0 +1,194 @@
+//! STEP import (issue 36 item 1): exact evaluation, chordal error, face tags and adjacency,
+//! holes, units, typed errors, and one STEP part planned end to end.
+
+use glam::{DVec2, DVec3};
+use slitpath::fixtures::step as fx;
+use slitpath::mesh::MeshOptions;
+use slitpath::step::{self, StepError, StepOptions};
+
+fn tess(text: &str, o: &StepOptions) -> (step::Model, step::Tessellation) {
+    let (m, t, _) = step::read_and_tessellate(text.as_bytes(), o, &|| 0.0).unwrap();
+    (m, t)
+}
+
+/// Largest of `distance(p)` over a barycentric grid of every triangle: `distance` is the
+/// exact distance of a point from the analytic surface (or an upper bound of it).
+fn dense_chordal(t: &step::Tessellation, distance: &dyn Fn(DVec3) -> f64) -> f64 {
+    let mut worst = 0.0f64;
+    for tri in &t.triangles {
+        let [a, b, c] = tri.map(|i| t.positions[i as usize]);
+        let n = 6;
+        for i in 0..=n {
+            for j in 0..=n - i {
+                let (wa, wb) = (i as f64 / n as f64, j as f64 / n as f64);
+                worst = worst.max(distance(a * wa + b * wb + c * (1.0 - wa - wb)));
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn bspline_points_equal_the_analytic_height_field() {
+    let m = step::read(fx::bspline_patch().as_bytes()).unwrap();
+    let s = &m.faces[0].surface;
+    assert_eq!(s.kind(), "b-spline");
+    for i in 0..=10 {
+        for j in 0..=10 {
+            let p = s.point(DVec2::new(i as f64 / 10.0, j as f64 / 10.0));
+            assert!((p.x - 6.0 * i as f64).abs() < 1e-12 && (p.y - 4.0 * j as f64).abs() < 1e-12);
+            assert!((p.z - fx::height(p.x, p.y)).abs() < 1e-12, "{p}");
+        }
+    }
+}
+
+#[test]
+fn the_tessellation_is_within_the_chordal_tolerance() {
+    for tol in [0.05, 0.005] {
+        let o = StepOptions { chordal_tol_mm: tol, ..Default::default() };
+        let (_, t) = tess(&fx::bspline_patch(), &o);
+        assert!(t.chordal_error_mm <= tol);
+        // The vertical offset from a height field bounds the distance from it.
+        let dense = dense_chordal(&t, &|p| (p.z - fx::height(p.x, p.y)).abs());
+        assert!(dense <= 1.1 * tol, "tol {tol}: dense chordal error {dense}");
+        // Every vertex lies on the surface.
+        for p in &t.positions {
+            assert!((p.z - fx::height(p.x, p.y)).abs() < 1e-9);
+        }
+        let area: f64 = t.faces.iter().map(|f| f.area_mm2).sum();
+        assert!(area > 2400.0 && area < 2400.0 * 1.05, "{area}");
+    }
+}
+
+#[test]
+fn two_faces_share_their_edge_and_tags_and_adjacency_are_right() {
+    let text = fx::two_patches();
+    let (m, t) = tess(&text, &StepOptions::default());
+    let ids: Vec<u64> = m.faces.iter().map(|f| f.id).collect();
+    assert_eq!(ids.len(), 2);
+    assert_eq!(t.faces[0].adjacent, vec![ids[1]]);
+    assert_eq!(t.faces[1].adjacent, vec![ids[0]]);
+    // Each triangle's tag is the face whose half it lies in.
+    for (k, tri) in t.triangles.iter().enumerate() {
+        let c = tri.iter().map(|&i| t.positions[i as usize]).sum::<DVec3>() / 3.0;
+        let expect = if c.x < 30.0 { ids[0] } else { ids[1] };
+        assert_eq!(t.face_of_triangle[k], expect, "{c}");
+    }
+    // Welded by construction: one open manifold surface with one boundary loop, a disk.
+    let out = step::load(text.as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    assert_eq!(out.mesh.report.components, 1);
+    assert_eq!(out.mesh.report.boundary_loops, 1);
+    assert_eq!(out.mesh.report.genus, 0);
+    assert_eq!(out.step.faces.len(), 2);
+    assert_eq!(out.face_of_triangle.len(), out.mesh.surface.triangles.len());
+    // Face selection: one face alone.
+    let o = StepOptions { faces: Some(vec![ids[1]]), ..Default::default() };
+    let one = step::load(text.as_bytes(), &o, &MeshOptions::default(), &|| 0.0).unwrap();
+    assert!(one.face_of_triangle.iter().all(|&f| f == ids[1]));
+    assert!(one.mesh.surface.positions.iter().all(|p| p.x >= 30.0 - 1e-9));
+    let bad = StepOptions { faces: Some(vec![999_999]), ..Default::default() };
+    assert!(matches!(
+        step::load(text.as_bytes(), &bad, &MeshOptions::default(), &|| 0.0),
+        Err(StepError::UnknownFace { id: 999_999, .. })
+    ));
+}
+
+#[test]
+fn a_trimmed_bspline_face_keeps_its_hole() {
+    let out = step::load(fx::patch_with_hole().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0)
+        .unwrap();
+    assert_eq!(out.mesh.report.boundary_loops, 2);
+    let ([x0, x1], [y0, y1]) = fx::HOLE_MM;
+    let s = &out.mesh.surface;
+    for t in &s.triangles {
+        let c = t.iter().map(|&i| s.positions[i as usize]).sum::<DVec3>() / 3.0;
+        assert!(!(c.x > x0 && c.x < x1 && c.y > y0 && c.y < y1), "a triangle inside the hole at {c}");
+    }
+    // Projected area = the rectangle minus the hole.
+    let projected: f64 = s
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| s.positions[i as usize]);
+            0.5 * ((b - a).cross(c - a)).z.abs()
+        })
+        .sum();
+    assert!((projected - (2400.0 - 15.0 * 14.0)).abs() < 1e-6, "{projected}");
+}
+
+#[test]
+fn a_plane_with_a_circular_hole_in_inches_reads_in_millimetres() {
+    for inch in [false, true] {
+        let text = fx::plate_with_hole(inch);
+        let (m, t) = tess(&text, &StepOptions::default());
+        assert_eq!(m.unit_mm, if inch { 25.4 } else { 1.0 });
+        assert_eq!(t.faces[0].surface, "plane");
+        assert_eq!(t.faces[0].loops, 2);
+        // Area of the polygonal hole is within the chordal tolerance of the circle's.
+        let exact = 80.0 * 60.0 - std::f64::consts::PI * 100.0;
+        let area = t.faces[0].area_mm2;
+        assert!(area > exact - 1e-9 && area < exact + 2.0 * std::f64::consts::PI * 10.0 * 0.01, "{inch}: {area}");
+        for p in &t.positions {
+            assert!((p.z - 5.0).abs() < 1e-9);
+            assert!((p - DVec3::new(30.0, 25.0, 5.0)).length() > 10.0 - 1e-9);
+        }
+    }
+}
+
+#[test]
+fn a_rational_surface_is_an_exact_cylinder() {
+    let (m, t) = tess(&fx::rational_quarter_cylinder(), &StepOptions { chordal_tol_mm: 0.01, ..Default::default() });
+    assert_eq!(t.faces[0].surface, "rational b-spline");
+    let s = &m.faces[0].surface;
+    for i in 0..=8 {
+        let p = s.point(DVec2::new(i as f64 / 8.0, 0.5));
+        assert!((DVec2::new(p.x, p.z).length() - 20.0).abs() < 1e-12, "{p}");
+    }
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.z).length() - 20.0).abs()) <= 0.011);
+    let area = t.faces[0].area_mm2;
+    let exact = 0.25 * std::f64::consts::TAU * 20.0 * 30.0;
+    assert!(area < exact && area > exact * (1.0 - 1e-3), "{area} vs {exact}");
+}
+
+#[test]
+fn garbled_and_truncated_files_give_typed_errors() {
+    let text = fx::two_patches();
+    // Every truncation: a typed error (or, cut after the last face, a smaller model), never a panic.
+    for cut in (0..text.len()).step_by(97) {
+        match step::read(&text.as_bytes()[..cut]) {
+            Err(StepError::NotStep | StepError::Truncated { .. } | StepError::Syntax { .. }) => {}
+            other => panic!("cut {cut}: {other:?}"),
+        }
+    }
+    // A dangling reference names the instance that holds it.
+    let dangling = text.replacen("EDGE_CURVE('',#", "EDGE_CURVE('',#999999", 1);
+    match step::read(dangling.as_bytes()) {
+        Err(StepError::Entity { id, message }) => assert!(message.contains("#999999"), "#{id}: {message}"),
+        other => panic!("{other:?}"),
+    }
+    // A malformed entity: a knot vector of the wrong length.
+    let bad_knots = text.replacen("(4,4),(3,3)", "(4,3),(3,3)", 1);
+    assert_ne!(bad_knots, text);
+    match step::read(bad_knots.as_bytes()) {
+        Err(StepError::Entity { message, .. }) => assert!(message.contains("knots"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(step::read(b"solid stl\n").unwrap_err(), StepError::NotStep);
+}
+
+/// One small STEP part (the B-spline face with a hole) planned end to end with the spiral: the
+/// verifier finds the scallop height under the limit and no gouge.
+#[test]
+fn a_trimmed_bspline_part_plans_end_to_end_with_the_verifier_passing() {
+    let text = fx::patch_with_hole();
+    let out = step::load(text.as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
+    let h = 0.02;
+    let options =
+        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    assert!(v.max_scallop_mm <= h, "max scallop {} mm", v.max_scallop_mm);
+    assert_eq!(v.gouges, 0);
+    assert!(p.gcode.lines().count() > 1000);
+}
