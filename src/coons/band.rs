@@ -76,12 +76,6 @@ pub struct Band {
     pub faces: Vec<BandFace>,
 }
 
-impl Band {
-    pub fn face(&self, i: usize, j: usize) -> &BandFace {
-        &self.faces[i % self.around + self.around * j]
-    }
-}
-
 /// The runs of a face's outer loop split at its corners (side k from corner k).
 fn sides_of(model: &Model, f: &Face, corner_deg: f64) -> Result<Vec<Side>, CoonsError> {
     if f.bounds.len() != 1 {

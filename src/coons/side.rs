@@ -36,8 +36,6 @@ pub struct ParamSide {
     /// Parameters and their σ-derivatives at σ = k / SAMPLES.
     pub uv: Vec<DVec2>,
     pub duv: Vec<DVec2>,
-    /// 3D points at the samples (for the fidelity check and the tests).
-    pub p: Vec<DVec3>,
 }
 
 /// Arc length of `c` between parameters `a` and `b` (signed by b − a: always ≥ 0 as used).
@@ -86,7 +84,6 @@ impl ParamSide {
         }
         let mut uv = Vec::with_capacity(SAMPLES + 1);
         let mut duv = Vec::with_capacity(SAMPLES + 1);
-        let mut p = Vec::with_capacity(SAMPLES + 1);
         let mut prev = start;
         let mut piece = 0;
         for k in 0..=SAMPLES {
@@ -116,10 +113,9 @@ impl ParamSide {
             let w = unwrap(s, s.invert(x, Some(prev)), prev);
             uv.push(w);
             duv.push(param_velocity(s, w, dx));
-            p.push(x);
             prev = w;
         }
-        ParamSide { length_mm: total, uv, duv, p }
+        ParamSide { length_mm: total, uv, duv }
     }
 
     /// Parameters and their σ-derivative at σ ∈ [0, 1] (cubic Hermite between samples).
