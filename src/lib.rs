@@ -19,6 +19,7 @@
 //! | ball centres, tool tips and axes, lead-in/out | [`toolpath`] | implemented |
 //! | G-code posts (LinuxCNC, GRBL, A/C 5-axis) and CL data | [`gcode`] | implemented |
 //! | flank strategy (seed 002): conical tool, G¹ multi-strip paths | [`flank`] | implemented |
+//! | band spiral over four-sided STEP faces (seed 004): Coons reparameterisation | [`coons`] | implemented |
 //! | scallop simulation of the final path | [`verify`] | implemented |
 //! | the whole pipeline, stage by stage | [`plan`] | implemented |
 //! | sparse Cholesky, cotan Laplacian (shared kernel) | [`linalg`] | implemented |
@@ -26,6 +27,7 @@
 
 pub mod bench;
 mod bvh;
+pub mod coons;
 pub mod fixtures;
 pub mod flank;
 pub mod flatten;

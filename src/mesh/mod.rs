@@ -157,6 +157,23 @@ impl Surface {
         Surface { vertex_normals, corner_normals, ..self.clone() }
     }
 
+    /// The same surface with the tool on the other side: windings, loops, normals and
+    /// curvatures reversed (an open surface whose side the mesh stage could not tell from the
+    /// tool axis, such as a tube round it).
+    pub fn flipped(&self) -> Surface {
+        let neg = |v: &Vec<DVec3>| v.iter().map(|n| -*n).collect::<Vec<_>>();
+        Surface {
+            positions: self.positions.clone(),
+            triangles: self.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+            loops: self.loops.iter().map(|l| l.iter().rev().copied().collect()).collect(),
+            face_normals: neg(&self.face_normals),
+            face_areas: self.face_areas.clone(),
+            vertex_normals: neg(&self.vertex_normals),
+            corner_normals: self.corner_normals.iter().map(|c| [-c[0], -c[2], -c[1]]).collect(),
+            curvature: self.curvature.iter().map(|c| FaceCurvature { e: -c.e, f: -c.f, g: -c.g, ..*c }).collect(),
+        }
+    }
+
     /// Total area, mm².
     pub fn area(&self) -> f64 {
         self.face_areas.iter().sum()

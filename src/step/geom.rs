@@ -228,6 +228,19 @@ impl Curve {
         }
     }
 
+    /// The derivative with respect to the curve's parameter.
+    pub fn derivative(&self, t: f64) -> DVec3 {
+        match self {
+            Curve::Line { dir, .. } => *dir,
+            Curve::Circle(f, r) => f.z.cross(f.radial(t)) * *r,
+            Curve::Ellipse(f, a, b) => {
+                let (s, c) = num::sin_cos(t);
+                f.y * (b * c) - f.x * (a * s)
+            }
+            Curve::BSpline(c) => c.eval(t).1,
+        }
+    }
+
     /// Whether the parameter is an angle (period 2π).
     pub fn periodic(&self) -> bool {
         matches!(self, Curve::Circle(..) | Curve::Ellipse(..))
@@ -314,6 +327,23 @@ mod tests {
                 let fu = (s.point(uv + DVec2::X * h) - s.point(uv - DVec2::X * h)) / (2.0 * h);
                 let fv = (s.point(uv + DVec2::Y * h) - s.point(uv - DVec2::Y * h)) / (2.0 * h);
                 assert!((fu - su).length() < 1e-6 && (fv - sv).length() < 1e-6, "{}", s.kind());
+            }
+        }
+    }
+
+    #[test]
+    fn curve_derivatives_match_finite_differences() {
+        let f = Frame::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.2, 0.1, 1.0), DVec3::X).unwrap();
+        let curves = [
+            Curve::Line { origin: DVec3::ONE, dir: DVec3::new(0.6, 0.0, 0.8) },
+            Curve::Circle(f, 4.0),
+            Curve::Ellipse(f, 5.0, 2.0),
+        ];
+        for c in &curves {
+            for &t in &[0.3, -1.2, 2.9] {
+                let h = 1e-6;
+                let fd = (c.point(t + h) - c.point(t - h)) / (2.0 * h);
+                assert!((fd - c.derivative(t)).length() < 1e-6, "{c:?} at {t}");
             }
         }
     }

@@ -318,7 +318,9 @@ fn mesh_face(
         message: match e {
             Failure::NoEar => "its trimming loops cross or are degenerate in the surface's parameters".into(),
             Failure::NoBridge => "a hole cannot be joined to the outer loop (loops cross?)".into(),
-            Failure::Budget => format!("the tolerance is not reached within 60 refinement rounds and {budget} triangles"),
+            Failure::Budget => {
+                format!("the tolerance is not reached within 60 refinement rounds and {budget} triangles")
+            }
         },
     };
     let mut tris = triangulate::ear_clip(&q, &outer_loop, &holes).map_err(fail)?;

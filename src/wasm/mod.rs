@@ -8,8 +8,10 @@
 //! The page holds one opaque [`Planner`] per loaded part. Later stages (flatten, slit map, origin,
 //! spiral, G-code) become further methods on it, each a few lines of conversion.
 
+mod coons;
 mod flank;
 
+pub use coons::{plan_coons, CoonsPlan};
 pub use flank::{plan_flank, FlankPlan};
 
 use std::sync::Once;

@@ -9,6 +9,9 @@
 //! - `flank PART.stl --tip-radius … --top-radius … --flute-length … --direction X,Y,Z [--strips N]
 //!   [--weights accuracy|g1|W2,W3] --post ac|cl -o OUT [--report R.json]`: 5-axis flank milling
 //!   with a conical tool (seed 002); `--axis` gives the tool's side of an open surface.
+//! - `coons PART.step --faces 12,13,… [--radius R --scallop H --axes 5 --post ac --no-smooth
+//!   --fallback --compare] -o OUT [--report R.json]`: seed 004's spiral over a closed band of
+//!   four-sided STEP faces (Coons maps on the exact faces).
 //! - `faces PART.step [--json]`: the STEP faces, their surface types, areas and neighbours.
 //!
 //! Every command that reads a part takes STL or STEP (by content or a `.step`/`.stp` name);
@@ -23,6 +26,8 @@
 #[global_allocator]
 static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+#[cfg(not(target_arch = "wasm32"))]
+mod coons;
 #[cfg(not(target_arch = "wasm32"))]
 mod flank;
 #[cfg(not(target_arch = "wasm32"))]
@@ -147,6 +152,14 @@ mod cli {
         Flank {
             #[command(flatten)]
             args: crate::flank::FlankArgs,
+            #[command(flatten)]
+            mesh: MeshArgs,
+        },
+        /// Plans seed 004's spiral over a closed band of four-sided STEP faces (`--faces`):
+        /// Coons maps on the exact faces, one continuous spiral, composite-C1 seams.
+        Coons {
+            #[command(flatten)]
+            args: crate::coons::CoonsArgs,
             #[command(flatten)]
             mesh: MeshArgs,
         },
@@ -308,6 +321,14 @@ mod cli {
             }
             Command::Flank { args, mesh: m } => {
                 let (program, json) = crate::flank::run(&args, &m.options(), &m.step_options()?)?;
+                write(&args.output, program.as_bytes())?;
+                if let Some(report) = &args.report {
+                    write(report, json.as_bytes())?;
+                }
+                Ok(())
+            }
+            Command::Coons { args, mesh: m } => {
+                let (program, json) = crate::coons::run(&args, &m.options(), &m.step_options()?)?;
                 write(&args.output, program.as_bytes())?;
                 if let Some(report) = &args.report {
                     write(report, json.as_bytes())?;
