@@ -23,6 +23,17 @@ export type Vec3 = [number, number, number];
 export type Vec2 = [number, number];
 
 /** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
+/** One handle's cut (mesh::handles::HandleCut). */
+export interface HandleCut {
+  /** Length of what is cut (the loop's edges off the rims), mm. */
+  length_mm: number;
+  loop_length_mm: number;
+  cut_edges: number;
+  rim_edges: number;
+  vertex_ids: number[];
+  polyline_mm: [number, number, number][];
+}
+
 export interface MeshReport {
   vertices: number;
   faces: number;
@@ -34,6 +45,8 @@ export interface MeshReport {
   euler_characteristic: number;
   genus: number;
   closed: boolean;
+  /** The loops a surface of genus > 0 was cut along to plan it, one per handle (absent for genus 0). */
+  handle_cuts?: HandleCut[];
   degenerate_faces_dropped: number;
   duplicate_faces_dropped: number;
   pinch_vertices_split: number;
