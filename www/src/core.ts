@@ -27,7 +27,13 @@ export type Vec2 = [number, number];
 export interface HandleCut {
   /** Length of what is cut (the loop's edges off the rims), mm. */
   length_mm: number;
+  /** What the handle's shortest loop would cut, mm. */
+  shortest_mm: number;
   loop_length_mm: number;
+  /** Distance from the cut to the nearer end of the handle's neck (about the overhangs' length), mm. */
+  depth_mm: number;
+  /** Whether the cut crosses the shortest loop (across the plate between a bridge's feet). */
+  crossing: boolean;
   cut_edges: number;
   rim_edges: number;
   vertex_ids: number[];
