@@ -84,7 +84,7 @@ impl BffSolver {
             let centre = angle_sum.len() as u32;
             let fill = fill_hole(input.positions, rim, &angle_sum, centre)
                 .ok_or(FlattenError::DegenerateHoleFill { hole: h })?;
-            if matches!(fill.kind, Fill::Fan | Fill::Centroid) {
+            if matches!(fill.kind, Fill::Fan | Fill::Circle) {
                 angle_sum.push(0.0);
                 fan_centre[h] = Some(centre);
             }
@@ -98,7 +98,7 @@ impl BffSolver {
                 Fill::Fan => hole_fills.fan += 1,
                 Fill::Triangulated => hole_fills.triangulated += 1,
                 Fill::Projected => hole_fills.projected += 1,
-                Fill::Centroid => hole_fills.centroid += 1,
+                Fill::Circle => hole_fills.circle += 1,
             }
         }
         // Rim edges now appear twice (real side and fill side): merge.

@@ -26,8 +26,10 @@
 //!
 //! Fallbacks, in order, when the layout is not a simple polygon (a hole around strong
 //! curvature): the rim projected on its Newell plane, triangulated the same way, with the
-//! angles and weights of the 3D triangles; then the fan to the rim's 3D centroid (the old
-//! filling's own fallback, kept so that no part fails here that did not before).
+//! angles and weights of the 3D triangles; then the rim laid out on a circle by arc length and
+//! fanned to its centre. (Until the handles of issue 34 the last resort was the fan to the rim's
+//! 3D centroid, which inverts where the rim is far from planar: a hole whose rim runs over a
+//! bridge and round two holes folded 87 triangles of plate_with_handle.)
 
 use std::f64::consts::PI;
 
@@ -45,8 +47,9 @@ pub(crate) enum Fill {
     Triangulated,
     /// The same from the rim projected on its plane, with the 3D triangles' angles.
     Projected,
-    /// Fan to the 3D centroid.
-    Centroid,
+    /// Fan to the centre of the rim laid out on a circle (by arc length): convex, so valid
+    /// whatever the rim (a hole whose rim runs over a bridge, issue 34 item 4).
+    Circle,
 }
 
 /// The filling of one hole: triangles (vertex indices of the filled disk, a fan's centre being
@@ -85,15 +88,28 @@ pub(crate) fn fill_hole(positions: &[DVec3], rim: &[u32], angle_sum: &[f64], cen
             return Some(assemble(Fill::Projected, &q, &tris, &corners));
         }
     }
-    // Last resort: the fan to the length-weighted 3D centroid (local index n).
+    // Last resort: the rim on a circle (by arc length, or evenly where an edge would span half
+    // of it) and the fan to its centre (local index n): convex, so never inverted.
     let len: Vec<f64> = (0..n).map(|m| (p3[(m + 1) % n] - p3[m]).length()).collect();
     let total: f64 = len.iter().sum();
-    let c = (0..n).map(|m| 0.5 * (p3[m] + p3[(m + 1) % n]) * len[m]).sum::<DVec3>() / total;
-    let corners: Vec<[DVec3; 3]> = (0..n).map(|m| [p3[m], p3[(m + 1) % n], c]).collect();
+    if !(total > 0.0) || n < 3 {
+        return None;
+    }
+    let even = len.iter().any(|&l| l > 0.25 * total);
+    let mut s = 0.0;
+    let pts: Vec<DVec2> = (0..n)
+        .map(|m| {
+            let t = if even { m as f64 / n as f64 } else { s / total };
+            s += len[m];
+            DVec2::new(num::cos(2.0 * PI * t), num::sin(2.0 * PI * t)) * (0.5 * total / PI)
+        })
+        .collect();
+    let corners: Vec<[DVec3; 3]> =
+        (0..n).map(|m| [pts[m].extend(0.0), pts[(m + 1) % n].extend(0.0), DVec3::ZERO]).collect();
     if !corners.iter().all(triangle_ok) {
         return None;
     }
-    Some(assemble(Fill::Centroid, &with_centre(&q, centre), &fan(n), &corners))
+    Some(assemble(Fill::Circle, &with_centre(&q, centre), &fan(n), &corners))
 }
 
 /// The fan of `n` rim vertices (local indices) around local vertex `n`.

@@ -194,8 +194,8 @@ pub struct HoleFills {
     pub triangulated: usize,
     /// The layout was not simple: the rim projected on its plane, triangulated.
     pub projected: usize,
-    /// Neither was simple: a fan to the 3D centroid of the rim.
-    pub centroid: usize,
+    /// Neither was simple: the rim laid out on a circle, fanned to its centre.
+    pub circle: usize,
 }
 
 /// What the plan report shows of a flattening: the method, the disk blend, the hole fillings and

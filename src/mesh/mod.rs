@@ -18,6 +18,9 @@
 //!    geometry), so the slit map can open every hole into a slit without folding a triangle and
 //!    every face has a corner off the boundary.
 //!
+//! 7. [`handles`]: a surface of genus g > 0 with a boundary is cut along g short non-separating
+//!    loops into a disk with holes (two more per handle); the report lists the cuts.
+//!
 //! And a query structure the later stages share: [`nearest`], the nearest facet point of a 3D
 //! point and a ball moved onto the mesh's offset surface (the toolpath keeps every ball centre
 //! off the facets with it), and [`axial`], the facet point nearest to an axis within a slab
@@ -34,6 +37,7 @@ pub mod axial;
 pub mod creases;
 pub mod extract;
 pub mod geometry;
+pub mod handles;
 pub mod nearest;
 pub mod quality;
 pub mod refine;
@@ -45,6 +49,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 pub use geometry::FaceCurvature;
+pub use handles::{HandleCut, HandleError, HandleOptions};
 
 /// Options of the mesh stage. `Default` gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -58,11 +63,19 @@ pub struct MeshOptions {
     /// For closed solids: faces whose outward normal is within this angle of the tool axis form
     /// the machined top surface; steeper faces are walls. Degrees. Default `80`.
     pub wall_angle_deg: f64,
+    /// How handles are cut when the surface to plan has genus > 0 ([`handles`]).
+    pub handles: HandleOptions,
 }
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        Self { weld_tolerance_rel: 1e-6, max_triangles: 5_000_000, tool_axis: DVec3::Z, wall_angle_deg: 80.0 }
+        Self {
+            weld_tolerance_rel: 1e-6,
+            max_triangles: 5_000_000,
+            tool_axis: DVec3::Z,
+            wall_angle_deg: 80.0,
+            handles: HandleOptions::default(),
+        }
     }
 }
 
@@ -108,7 +121,7 @@ impl Surface {
     }
 
     /// The planner's precondition: a connected surface of genus 0 with at least one boundary
-    /// loop (a disk with holes). Later strategies may lift the genus restriction.
+    /// loop (a disk with holes). [`load`] cuts the handles of a surface of genus > 0 first.
     pub fn check_plannable(&self) -> Result<(), MeshError> {
         if self.loops.is_empty() {
             return Err(MeshError::Closed);
@@ -208,6 +221,10 @@ pub struct MeshReport {
     /// For a closed solid: the same figures for the extracted machinable top surface.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machined: Option<Box<MeshReport>>,
+    /// The loops the surface to plan was cut along, one per handle, when its genus is > 0
+    /// ([`handles`]): the planned surface is a disk with holes (each cut adds one or two).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub handle_cuts: Vec<HandleCut>,
 }
 
 /// The result of the stage: the report of the whole model and the surface to plan.
@@ -244,8 +261,10 @@ pub enum MeshError {
     NothingFacesTool { axis: [f64; 3], wall_angle_deg: f64 },
     #[error("the surface to machine is closed (it has no boundary loop): it cannot be flattened")]
     Closed,
-    #[error("the surface to machine has genus {genus} ({loops} boundary loops): only surfaces of genus 0 (a disk with holes) can be planned yet")]
+    #[error("the surface to machine has genus {genus} ({loops} boundary loops): its handles must be cut first (a disk with holes is planned)")]
     HighGenus { genus: i64, loops: usize },
+    #[error("cutting the handles: {0}")]
+    Handles(#[from] HandleError),
     #[error("invalid mesh option: {0}")]
     InvalidOption(String),
 }
@@ -309,6 +328,8 @@ pub fn from_triangles(mesh: &TriMesh, options: &MeshOptions) -> Result<MeshOutpu
         component = top_component;
     }
     let surface = geometry::build_surface(component)?;
+    let (surface, handle_cuts) = handles::cut_handles(&surface, &options.handles)?;
+    report.handle_cuts = handle_cuts;
     Ok(MeshOutput { report, surface })
 }
 

@@ -389,6 +389,7 @@ fn figures(topo: &Topology, faces: &[usize], components: &[&ComponentInfo]) -> M
         area_mm2: components.iter().map(|c| c.area).sum(),
         bbox: [lo.to_array(), hi.to_array()],
         machined: None,
+        handle_cuts: Vec::new(),
     }
 }
 

@@ -87,6 +87,7 @@ impl JsMeshOptions {
             wall_angle_deg: js.wall_angle_deg.unwrap_or(d.wall_angle_deg),
             weld_tolerance_rel: js.weld_tolerance_rel.unwrap_or(d.weld_tolerance_rel),
             max_triangles: js.max_triangles.unwrap_or(d.max_triangles),
+            handles: d.handles,
         })
     }
 }

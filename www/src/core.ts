@@ -23,6 +23,23 @@ export type Vec3 = [number, number, number];
 export type Vec2 = [number, number];
 
 /** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
+/** One handle's cut (mesh::handles::HandleCut). */
+export interface HandleCut {
+  /** Length of what is cut (the loop's edges off the rims), mm. */
+  length_mm: number;
+  /** What the handle's shortest loop would cut, mm. */
+  shortest_mm: number;
+  loop_length_mm: number;
+  /** Distance from the cut to the nearer end of the handle's neck (about the overhangs' length), mm. */
+  depth_mm: number;
+  /** Whether the cut crosses the shortest loop (across the plate between a bridge's feet). */
+  crossing: boolean;
+  cut_edges: number;
+  rim_edges: number;
+  vertex_ids: number[];
+  polyline_mm: [number, number, number][];
+}
+
 export interface MeshReport {
   vertices: number;
   faces: number;
@@ -34,6 +51,8 @@ export interface MeshReport {
   euler_characteristic: number;
   genus: number;
   closed: boolean;
+  /** The loops a surface of genus > 0 was cut along to plan it, one per handle (absent for genus 0). */
+  handle_cuts?: HandleCut[];
   degenerate_faces_dropped: number;
   duplicate_faces_dropped: number;
   pinch_vertices_split: number;

@@ -376,6 +376,9 @@ mod cli {
             println!("machined top surface:");
             print_figures("  ", m);
         }
+        if let Some(note) = crate::plan::handle_note(r) {
+            println!("{note}");
+        }
     }
 
     fn print_figures(indent: &str, r: &mesh::MeshReport) {

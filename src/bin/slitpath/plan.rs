@@ -119,9 +119,28 @@ pub fn run(
     let mut plan = planner.plan(options, &mut |_, _, _| {}, &now).map_err(|e| format!("{name}: {e}"))?;
     plan.report.timings_ms.read = t_read;
     plan.report.timings_ms.total += t_read;
+    if let Some(note) = handle_note(&plan.report.mesh) {
+        eprintln!("note: {name}: {note}");
+    }
     for warning in &plan.report.warnings {
         eprintln!("warning: {name}: {warning}");
     }
     let json = crate::part::report_json(&plan.report, step.as_ref())?;
     Ok((plan.gcode, json))
+}
+
+/// One line on the handles cut to plan a part of genus > 0 (`None` for genus 0).
+pub fn handle_note(report: &mesh::MeshReport) -> Option<String> {
+    let cuts = &report.handle_cuts;
+    if cuts.is_empty() {
+        return None;
+    }
+    let lengths: Vec<String> = cuts.iter().map(|c| format!("{:.2}", c.length_mm)).collect();
+    Some(format!(
+        "genus {}: cut along {} handle loop{} ({} mm cut; the path runs along both sides of each cut, see mesh.handle_cuts in the report)",
+        report.genus,
+        cuts.len(),
+        if cuts.len() == 1 { "" } else { "s" },
+        lengths.join(", ")
+    ))
 }

@@ -32,7 +32,7 @@ function rows(report: MeshReport, planned: boolean): Row[] {
     ["Components", integer.format(report.components), planned && report.components > 1 ? "the largest is planned" : undefined],
     ["Boundary loops", loops(report)],
     ["Euler characteristic", integer.format(report.euler_characteristic)],
-    ["Genus", integer.format(report.genus), planned && report.genus > 0 ? "only genus 0 can be planned yet" : undefined],
+    ["Genus", integer.format(report.genus), handleNote(report)],
     ["Closed", report.closed ? "yes (a solid)" : "no"],
     ["Degenerate faces dropped", integer.format(report.degenerate_faces_dropped)],
     ["Duplicate faces dropped", integer.format(report.duplicate_faces_dropped)],
@@ -72,4 +72,12 @@ export function renderReport(container: HTMLElement, report: MeshReport, name: s
     parts.push(intro, table(report.machined, true, "Machined top surface", "report-machined"));
   }
   container.replaceChildren(...parts);
+}
+
+/** What the planner did about handles: the cuts' count and lengths (genus > 0 only). */
+function handleNote(report: MeshReport): string | undefined {
+  const cuts = report.handle_cuts ?? [];
+  if (report.genus <= 0 || cuts.length === 0) return undefined;
+  const mm = cuts.map((c) => c.length_mm.toFixed(1)).join(", ");
+  return `cut along ${cuts.length} handle loop${cuts.length === 1 ? "" : "s"} (${mm} mm): the path runs along both sides`;
 }
