@@ -13,8 +13,8 @@
 //! lower by the lift the spacing plans for a ball touching there (see `Spacer::lift_mm`).
 //!
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
-//! its top: on every edge crossing the band and on three lines arg w = const across each of its
-//! faces, the cusp itself is located (where the two rings are equally far) and tested too
+//! its top: on every edge crossing the band and on [`CROSSINGS`] − 1 lines arg w = const across
+//! each of its faces, the cusp itself is located (where the two rings are equally far) and tested too
 //! ([`Cutter::add_cusps`]). Issue 34's sweep found the finish at 1.02–1.33 h on 11 of 200 coarse
 //! generated parts between the fixed points, beside creases and round the corners of the outer
 //! loop, which the map squeezes into a face or two.
@@ -219,8 +219,8 @@ impl<'a> Gate<'a> {
         }
     }
 
-    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, at a quarter, half
-    /// and three quarters of its angular extent, with their cusps ([`Cutter::add_cusps`]): the
+    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, [`CROSSINGS`] − 1 of
+    /// them evenly over its angular extent, with their cusps ([`Cutter::add_cusps`]): the
     /// ring pair's cusp inside a face, where the rings bend most (round the corner of an outer
     /// loop the map squeezes into one face), lies between the face's edges.
     fn face_crossings(&self, f: usize, lo: f64, hi: f64, cutter: &Cutter<'_>, out: &mut Vec<GatePoint>) {
@@ -275,7 +275,9 @@ impl<'a> Gate<'a> {
     }
 }
 
-/// Lines across each face of a band are `1/CROSSINGS` of its angular extent apart.
+/// Lines across each face of a band are `1/CROSSINGS` of its angular extent apart: with 4,
+/// gen104 of the sweep kept 1.29 h between them (a delaunay mesh with normals tilted by 30°),
+/// with 8 0.97 h.
 const CROSSINGS: usize = 8;
 
 /// Regula falsi steps locating a cusp along an edge ([`Cutter::add_cusps`]).
