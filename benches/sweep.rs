@@ -3,7 +3,8 @@
 //! the failures grouped by the stage that failed (`finish`: planned, but the verified finish
 //! breaks [`slitpath::bench::SWEEP_LIMITS`]). Asserts nothing.
 //!
-//! `SLITPATH_SWEEP_PARTS=N` sweeps N parts, `SLITPATH_SWEEP_FACES=LO:HI` other face counts.
+//! `SLITPATH_SWEEP_PARTS=N` sweeps N parts, `SLITPATH_SWEEP_SEEDS=3,40,…` those seeds only,
+//! `SLITPATH_SWEEP_FACES=LO:HI` other face counts.
 
 use slitpath::bench::{format_sweep, run_sweep, SWEEP_FACES};
 use slitpath::fixtures::generated;
@@ -27,11 +28,15 @@ fn main() {
         .unwrap_or(SWEEP_FACES);
     let _ = rayon::ThreadPoolBuilder::new().stack_size(8 << 20).build_global();
     rayon::scope(|_| {
-        println!("planned-everywhere sweep, native: {count} generated parts, {faces:?} faces");
+        println!("planned-everywhere sweep, native: generated parts, {faces:?} faces");
         let mut failures: BTreeMap<&str, Vec<String>> = BTreeMap::new();
         let (mut planned, mut methods) = (0, BTreeMap::new());
         let mut lengths = Vec::new();
-        for seed in 0..count {
+        let seeds: Vec<u64> = match std::env::var("SLITPATH_SWEEP_SEEDS") {
+            Ok(list) => list.split(',').filter_map(|s| s.trim().parse().ok()).collect(),
+            Err(_) => (0..count).collect(),
+        };
+        for seed in seeds {
             let part = generated::part(seed, faces.clone());
             match run_sweep(&part, 100_000, &now) {
                 Ok(row) => {

@@ -452,13 +452,7 @@ impl Planner {
             ..ToolpathOptions::default()
         };
         let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
-        let chord = spiral_options.chord_tolerance_mm;
-        // How deep the ball may dip into the facets: with smooth facets, their own deviation
-        // from the smooth surface they tessellate.
-        let dip = match options.facets {
-            Facets::Exact => 0.0,
-            Facets::Smooth => facet_tolerance_mm(&self.surface, r),
-        };
+        let (chord, dip) = (spiral_options.chord_tolerance_mm, self.dip_mm(options));
         let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
         let (contacts, normals, clearance) =
             toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, dip, chord);
@@ -489,21 +483,7 @@ impl Planner {
             if options.verify_samples == 0 {
                 return Ok(None);
             }
-            let centres: Vec<DVec3> = toolpath.contact_moves().iter().map(|m| m.centre).collect();
-            let verify_options = VerifyOptions {
-                radius_mm: r,
-                scallop_mm: options.scallop_mm,
-                samples: options.verify_samples,
-                // Centres keep R − dip from every facet; straight moves between them are split
-                // where they dip deeper than the chord tolerance past that.
-                gouge_tolerance_mm: dip + chord,
-                // Where the spacing does not plan for the balls' lift off the facets; the balls
-                // standing for the valleys' reach may dip as deep as the path's.
-                valley_lift_mm: Some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
-                valley_dip_mm: dip,
-                ..VerifyOptions::default()
-            };
-            Ok(Some(verify::verify_with_faces(self.riding(options.facets), &self.faces, &[centres], &verify_options)?))
+            Ok(Some(self.verify(&toolpath, options, VerifyOptions::default().seed)?))
         };
         let mut post_ms = 0.0;
         let (verification, gcode) = crate::par::beside(verify_centres, || {
@@ -580,6 +560,39 @@ impl Planner {
         let spiral = spiral::spiral_on(&lift, &rings, spiral_options);
         timings.spiral += now() - t;
         Ok((map, optimise_report, rings, spiral?))
+    }
+
+    /// The planner's verification of `toolpath` planned with `options`, its samples drawn with
+    /// `seed`: the plan's own uses the default seed; another one checks the plan on fresh
+    /// samples (a peak narrower than the samples' spacing is found by one set and not another).
+    pub fn verify(&self, toolpath: &Toolpath, options: &PlanOptions, seed: u64) -> Result<Verification, VerifyError> {
+        let r = options.radius_mm;
+        let (dip, chord) = (self.dip_mm(options), chord_tolerance_mm(r, options.scallop_mm));
+        let centres: Vec<DVec3> = toolpath.contact_moves().iter().map(|m| m.centre).collect();
+        let verify_options = VerifyOptions {
+            radius_mm: r,
+            scallop_mm: options.scallop_mm,
+            samples: options.verify_samples,
+            seed,
+            // Centres keep R − dip from every facet; straight moves between them are split where
+            // they dip deeper than the chord tolerance past that.
+            gouge_tolerance_mm: dip + chord,
+            // Where the spacing does not plan for the balls' lift off the facets; the balls
+            // standing for the valleys' reach may dip as deep as the path's.
+            valley_lift_mm: Some(crate::spacing::LIFT_VALLEY * options.scallop_mm),
+            valley_dip_mm: dip,
+            ..VerifyOptions::default()
+        };
+        verify::verify_with_faces(self.riding(options.facets), &self.faces, &[centres], &verify_options)
+    }
+
+    /// How deep the ball may dip into the facets: with smooth facets, their own deviation from
+    /// the smooth surface they tessellate.
+    fn dip_mm(&self, options: &PlanOptions) -> f64 {
+        match options.facets {
+            Facets::Exact => 0.0,
+            Facets::Smooth => facet_tolerance_mm(&self.surface, options.radius_mm),
+        }
     }
 
     /// The surface whose normals the ball rides for `facets`.

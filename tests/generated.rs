@@ -110,3 +110,34 @@ fn the_sweeps_worst_peak_is_located_between_its_rings() {
     assert!(!outside_valleys.sample.in_valley && outside_valleys.sample.scallop_mm == v.max_scallop_outside_valleys_mm);
     println!("{}: max {:.3} h at {peak:?}", part.name, v.max_scallop_mm / h);
 }
+
+/// Issue 34's sweep: the finish peaked over h between the spacing gate's points on coarse
+/// staircase rectangles: gen130 at 1.33 h round a corner of its outer loop (the map squeezes the
+/// rings' turn into one face), gen143 at 1.14 h beside its facets. The gate now finds each
+/// band's cusp on every edge and across every face. Checked on samples the plan never saw.
+#[test]
+fn issue_34_sweep_cusps_between_the_gates_points_stay_under_h() {
+    for seed in [130, 143] {
+        let part = generated::part(seed, slitpath::bench::SWEEP_FACES);
+        let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
+        let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+        let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
+        let options = plan::PlanOptions { radius_mm: r, scallop_mm: h, verify_samples: 0, ..Default::default() };
+        let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+        let fresh = plan::PlanOptions { verify_samples: 400_000, ..options };
+        let v = planner.verify(&p.toolpath, &fresh, slitpath::bench::FRESH_SEED).expect("verified");
+        println!(
+            "{}: max {:.3} h outside valleys, {:.3} h in all",
+            part.name,
+            v.max_scallop_outside_valleys_mm / h,
+            v.max_scallop_mm / h
+        );
+        assert!(
+            v.max_scallop_outside_valleys_mm <= 1.02 * h,
+            "{}: {:.3} h",
+            part.name,
+            v.max_scallop_outside_valleys_mm / h
+        );
+        assert_eq!((v.gouges, v.uncovered_samples), (0, 0), "{}", part.name);
+    }
+}
