@@ -712,9 +712,9 @@ mod tests {
 
     #[test]
     fn the_cusp_along_a_line_is_where_the_two_rings_are_equally_far() {
-        // Two concentric rings of ball centres (radii 10 and 9.6 mm, R 3 mm over the plane z = 0)
-        // and a line across the band at angle 0.3, tilted in z so that the cusp is not at its
-        // middle: the cusp found must be the brute-force maximum of the nearer ring's distance.
+        // Two concentric rings of ball centres (radii 10 and 9.2 mm, R 3 mm over the plane z = 0)
+        // and a line across the band at angle 0.3, slightly tilted in z: the cusp found must be
+        // the brute-force maximum of the nearer ring's distance.
         let r = 3.0;
         let circle = |radius: f64| {
             let mut line = RingLine::new(radius / 10.0);
@@ -724,14 +724,14 @@ mod tests {
             }
             line
         };
-        let (upper, lower) = (circle(10.0), circle(9.6));
+        let (upper, lower) = (circle(10.0), circle(9.2));
         let refs = [&upper, &lower];
         let h = 0.01;
         let cutter = Cutter::new(&refs, r, h);
-        let theta = 0.3;
+        let theta: f64 = 0.3;
         let (dir, n) = (DVec3::new(theta.cos(), theta.sin(), 0.0), DVec3::Z);
         let end = |s: f64, z: f64| (dir * s + DVec3::Z * z, n, DVec2::new(theta, s / 10.0));
-        let (a, b) = (end(10.0, 0.0), end(9.6, 0.05));
+        let (a, b) = (end(10.0, 0.0), end(9.2, 0.005));
         let mut out = Vec::new();
         line(a, b, 0.5, 4.0, None, &mut out);
         assert_eq!(out.len(), 4, "four points, none on the cusp");
@@ -749,7 +749,9 @@ mod tests {
             .map(|p| gap(&p))
             .fold(f64::NEG_INFINITY, f64::max);
         let found = gap(&out[4]);
-        assert!((found - dense).abs() < 1e-7, "cusp gap {found} mm, brute force {dense} mm");
+        // The V's flanks slope by about 0.13, the brute force steps 4e-5 mm: it may fall short
+        // of the peak by up to 3e-6 mm, never pass it.
+        assert!(found >= dense - 1e-12 && found - dense < 5e-6, "cusp gap {found} mm, brute force {dense} mm");
         // The four evenly spaced points pass well under it.
         let sampled = out[..4].iter().map(gap).fold(f64::NEG_INFINITY, f64::max);
         assert!(dense - sampled > 1e-3, "sampled {sampled}, cusp {dense}");
