@@ -150,8 +150,8 @@ async function loadStl(name: string, read: (onProgress: (fraction: number) => vo
 /** Shows a part made ready by the worker (an STL, or STEP faces): its report and surface. */
 function showPart(loaded: LoadedPart): void {
   part = { loaded, generation: ++generation };
-  const faces = loaded.stepFaces ? `, ${loaded.stepFaces.length} STEP faces` : "";
-  byId("part-name").textContent = `${loaded.name} — ${loaded.report.machined?.faces ?? loaded.report.faces} triangles${faces}`;
+  const faces = loaded.stepFaces ? ` (${loaded.stepFaces.length} STEP faces)` : "";
+  byId("part-name").textContent = `${loaded.name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces${faces}`;
   renderReport(byId("report"), loaded.report, loaded.name);
   form.setHoles(Math.max(0, loaded.loops.length - 1));
   views.setPart(loaded);
