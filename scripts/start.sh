@@ -14,10 +14,11 @@ bash scripts/setup.sh
 say "building the wasm package (release) into www/pkg"
 wasm-pack build --target web --out-dir www/pkg --release
 
-say "writing the sample parts www/public/samples/freeform_4_holes.stl and blade.stl (flank)"
+say "writing the sample parts www/public/samples/freeform_4_holes.stl, blade.stl (flank) and blade_band.step (Coons)"
 mkdir -p www/public/samples
 cargo run --release --quiet --bin slitpath -- fixture freeform_4_holes -o www/public/samples/freeform_4_holes.stl
 cargo run --release --quiet --bin slitpath -- fixture blade -o www/public/samples/blade.stl
+cargo run --release --quiet --bin slitpath -- fixture step:blade_band -o www/public/samples/blade_band.step
 
 say "serving the page with Vite on $URL"
 vite www --host 127.0.0.1 --port "$PORT" --strictPort --clearScreen false &

@@ -13,11 +13,12 @@ if [ ! -t 1 ]; then bold="" green="" red="" reset=""; fi
 names=() results=() seconds=()
 
 # The bundled sample parts, written by the CLI into www/public (copied into the page build): the
-# spiral's freeform part and the flank strategy's blade.
+# spiral's freeform part, the flank strategy's blade and the STEP blade band (Coons band strategy).
 sample_part() {
   mkdir -p www/public/samples
   cargo run --release --quiet --bin slitpath -- fixture freeform_4_holes -o www/public/samples/freeform_4_holes.stl
   cargo run --release --quiet --bin slitpath -- fixture blade -o www/public/samples/blade.stl
+  cargo run --release --quiet --bin slitpath -- fixture step:blade_band -o www/public/samples/blade_band.step
 }
 
 # step NAME COMMAND...: runs the command in a subshell with `set -e` (so a multi-command
@@ -108,7 +109,7 @@ else
 fi
 # Playwright (playwright-core) drives Debian's /usr/bin/chromium; screenshots go to test-output/.
 if [ $build_ok -eq 0 ] && [ $lib_ok -eq 0 ] && [ $sample_ok -eq 0 ]; then
-  step "page and package in headless Chromium (Playwright)" node --test --test-concurrency=1 --test-reporter=spec tests/e2e/page.test.mjs tests/e2e/flank-page.test.mjs tests/e2e/large-part.test.mjs tests/e2e/library.test.mjs
+  step "page and package in headless Chromium (Playwright)" node --test --test-concurrency=1 --test-reporter=spec tests/e2e/page.test.mjs tests/e2e/flank-page.test.mjs tests/e2e/large-part.test.mjs tests/e2e/library.test.mjs tests/e2e/step-page.test.mjs
 else
   skip "page and package in headless Chromium (Playwright)" "the page, the package or the sample part did not build"
 fi

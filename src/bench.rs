@@ -2,6 +2,8 @@
 //! Chromium), so both measure the same work. The clock is passed in: the core has no I/O and
 //! `std::time::Instant` does not exist on `wasm32-unknown-unknown`.
 
+pub mod step;
+
 use crate::fixtures;
 use crate::flatten::{BffSolver, FlattenInput, FlattenOptions};
 use crate::mesh::{self, MeshOptions, TriMesh};

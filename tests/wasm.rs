@@ -374,7 +374,7 @@ fn plan_flank_returns_the_plan_as_typed_arrays() {
             "weights": "g1", "post": "cl", "verifySamples": 500}"#,
     )
     .unwrap();
-    let plan = slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, options, None).unwrap();
+    let plan = slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, options, None, JsValue::UNDEFINED).unwrap();
     let moves = plan.tips().len() / 3;
     assert!(moves > 10 && plan.axes().len() == 3 * moves);
     assert_eq!(plan.strip_moves().len(), 2 * 4);
@@ -386,11 +386,12 @@ fn plan_flank_returns_the_plan_as_typed_arrays() {
     let guide = Reflect::get(&report, &"guide".into()).unwrap();
     assert_eq!(Reflect::get(&guide, &"strips".into()).unwrap().as_f64(), Some(4.0));
     let bad = js_sys::JSON::parse(r#"{"tipRadiusMm": -1}"#).unwrap();
-    let err: js_sys::Error =
-        JsValue::from(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, bad, None).err().unwrap())
-            .dyn_into()
-            .unwrap();
+    let err: js_sys::Error = JsValue::from(
+        slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, bad, None, JsValue::UNDEFINED).err().unwrap(),
+    )
+    .dyn_into()
+    .unwrap();
     assert!(String::from(err.message()).contains("tip_radius_mm"), "{}", String::from(err.message()));
     let unknown = js_sys::JSON::parse(r#"{"radius": 1}"#).unwrap();
-    assert!(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, unknown, None).is_err());
+    assert!(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, unknown, None, JsValue::UNDEFINED).is_err());
 }

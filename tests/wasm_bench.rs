@@ -97,3 +97,22 @@ async fn flank_in_the_browser() {
         Err(e) => console_log!("the flank case cannot be planned: {e}"),
     }
 }
+
+#[wasm_bindgen_test]
+async fn step_in_the_browser() {
+    use slitpath::bench::step::{format_step, run_coons_band, run_step, step_cases};
+    let performance = web_sys::window().expect("a window").performance().expect("performance");
+    let now = || performance.now();
+    for (name, text) in step_cases() {
+        yield_to_browser().await;
+        match run_step(name, &text, 3, &now) {
+            Ok(f) => console_log!("wasm (headless Chromium), best of 3: {}", format_step(&f)),
+            Err(e) => console_log!("{name} cannot be read: {e}"),
+        }
+    }
+    yield_to_browser().await;
+    match run_coons_band(&now) {
+        Ok(row) => console_log!("wasm (headless Chromium): {row}"),
+        Err(e) => console_log!("the blade band cannot be planned: {e}"),
+    }
+}

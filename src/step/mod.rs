@@ -168,9 +168,22 @@ pub fn read_and_tessellate(
     check_options(o)?;
     let t0 = now();
     let model = read(bytes)?;
+    let read_ms = now() - t0;
+    let (model, tess, [_, tessellate_ms]) = tessellate_model(model, o, now)?;
+    Ok((model, tess, [read_ms, tessellate_ms]))
+}
+
+/// [`read_and_tessellate`] of a model already read (so a caller can report progress between the
+/// two); the read time returned is 0.
+pub fn tessellate_model(
+    model: Model,
+    o: &StepOptions,
+    now: &dyn Fn() -> f64,
+) -> Result<(Model, Tessellation, [f64; 2]), StepError> {
+    check_options(o)?;
     let t1 = now();
     let tess = tessellate::tessellate(&model, o.faces.as_deref(), o)?;
-    Ok((model, tess, [t1 - t0, now() - t1]))
+    Ok((model, tess, [0.0, now() - t1]))
 }
 
 /// STEP bytes → the planner's surface and the STEP report. `now` gives milliseconds.

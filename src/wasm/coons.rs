@@ -120,6 +120,12 @@ impl CoonsPlan {
         self.plan.points.iter().map(|p| p.face as f64).collect()
     }
 
+    /// Unit surface normal (towards the tool) of every contact point, flat xyz.
+    #[wasm_bindgen(js_name = pathNormals)]
+    pub fn path_normals(&self) -> Vec<f64> {
+        self.plan.points.iter().flat_map(|p| p.n.to_array()).collect()
+    }
+
     /// Tool tip of every move, flat xyz.
     pub fn tips(&self) -> Vec<f64> {
         self.plan.toolpath.moves.iter().flat_map(|m| m.tip.to_array()).collect()

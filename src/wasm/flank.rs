@@ -2,7 +2,7 @@
 //! options?, onProgress?)` returns a `FlankPlan` whose getters hand out the report (the CLI's
 //! `--report` object) and flat typed arrays. Type conversion only.
 
-use super::{init, js_err, reject_unknown_fields, to_js, JsMeshOptions};
+use super::{init, js_err, reject_unknown_fields, to_js, JsMeshOptions, JsStepOptions};
 use crate::flank::{self, ConeTool, FlankOptions, Weights};
 use crate::gcode::Post;
 use serde::Deserialize;
@@ -136,19 +136,26 @@ pub struct FlankPlan {
     surface: crate::mesh::Surface,
 }
 
-/// Plans flank strips for the STL `stl` (see `JsFlankOptions`); `on_progress(stage, done,
-/// total)` is called as each stage starts. Throws an `Error` naming the fault.
+/// Plans flank strips for the STL or STEP file `part` (see `JsFlankOptions`; STEP detected by
+/// content, its faces chosen by `stepOptions` as in `Planner.fromStep`); `on_progress(stage,
+/// done, total)` is called as each stage starts. Throws an `Error` naming the fault.
 #[wasm_bindgen(js_name = planFlank)]
 pub fn plan_flank(
-    stl: &[u8],
+    part: &[u8],
     mesh_options: JsValue,
     options: JsValue,
     on_progress: Option<js_sys::Function>,
+    step_options: JsValue,
 ) -> Result<FlankPlan, JsError> {
     init();
     let mesh_options = JsMeshOptions::parse(mesh_options)?;
     let options = JsFlankOptions::parse(options)?;
-    let surface = crate::mesh::load(stl, &mesh_options).map_err(js_err)?.surface;
+    let surface = if crate::step::is_step(part) {
+        let step_options = JsStepOptions::parse(step_options)?;
+        crate::step::load(part, &step_options, &mesh_options, &js_sys::Date::now).map_err(js_err)?.mesh.surface
+    } else {
+        crate::mesh::load(part, &mesh_options).map_err(js_err)?.surface
+    };
     let mut progress = |stage: &str, done: usize, total: usize| {
         if let Some(f) = &on_progress {
             let _ = f.call3(&JsValue::NULL, &stage.into(), &(done as f64).into(), &(total as f64).into());

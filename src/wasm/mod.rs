@@ -128,15 +128,26 @@ pub fn is_step(bytes: &[u8]) -> bool {
     crate::step::is_step(bytes)
 }
 
-/// The faces of a STEP file, tessellated: `{faces: [{id, surface, surfaceId, loops, areaMm2,
-/// triangles, adjacent}], positions, triangles, faceOfTriangle, chordalErrorMm}` (snake_case
-/// keys as serde writes them), for the page to show and pick faces. `stepOptions` as in
-/// `Planner.fromStep`.
+/// The faces of a STEP file, tessellated: `{faces: [{id, surface, surface_id, loops, area_mm2,
+/// triangles, adjacent}], positions, triangles, face_of_triangle, chordal_error_mm, read_ms,
+/// tessellate_ms}` (snake_case keys as serde writes them), for the page to show and pick faces.
+/// `stepOptions` as in `Planner.fromStep`; `onProgress(step, done, total)` is called before
+/// reading and before tessellating.
 #[wasm_bindgen(js_name = stepFaces)]
-pub fn step_faces(step: &[u8], step_options: JsValue) -> Result<JsValue, JsError> {
+pub fn step_faces(
+    step: &[u8],
+    step_options: JsValue,
+    on_progress: Option<js_sys::Function>,
+) -> Result<JsValue, JsError> {
     init();
     let o = JsStepOptions::parse(step_options)?;
-    let (_, t, _) = crate::step::read_and_tessellate(step, &o, &now).map_err(js_err)?;
+    let mut progress = progress(&on_progress);
+    progress("reading STEP", 0, 2);
+    let t0 = now();
+    let model = crate::step::read(step).map_err(js_err)?;
+    let read_ms = now() - t0;
+    progress("tessellating faces", 1, 2);
+    let (_, t, [_, tessellate_ms]) = crate::step::tessellate_model(model, &o, &now).map_err(js_err)?;
     #[derive(Serialize)]
     struct Faces {
         faces: Vec<crate::step::FaceInfo>,
@@ -144,6 +155,8 @@ pub fn step_faces(step: &[u8], step_options: JsValue) -> Result<JsValue, JsError
         triangles: Vec<u32>,
         face_of_triangle: Vec<u64>,
         chordal_error_mm: f64,
+        read_ms: f64,
+        tessellate_ms: f64,
     }
     to_js(&Faces {
         faces: t.faces,
@@ -151,6 +164,8 @@ pub fn step_faces(step: &[u8], step_options: JsValue) -> Result<JsValue, JsError
         triangles: t.triangles.iter().flatten().copied().collect(),
         face_of_triangle: t.face_of_triangle,
         chordal_error_mm: t.chordal_error_mm,
+        read_ms,
+        tessellate_ms,
     })
 }
 

@@ -15,6 +15,7 @@ describe("the npm package (worker-based API)", { concurrency: false }, () => {
     cpSync(join(root, "www/dist-lib"), join(dir, "lib"), { recursive: true });
     cpSync(join(root, "www/public/samples/freeform_4_holes.stl"), join(dir, "part.stl"));
     cpSync(join(root, "www/public/samples/blade.stl"), join(dir, "blade.stl"));
+    cpSync(join(root, "www/public/samples/blade_band.step"), join(dir, "band.step"));
     writeFileSync(join(dir, "index.html"), '<!doctype html><meta charset="utf-8"><title>portal</title><p>portal</p>');
     server = await serve(dir);
     browser = await launch();
@@ -34,6 +35,52 @@ describe("the npm package (worker-based API)", { concurrency: false }, () => {
     assert.match(readFileSync(join(root, "www/dist-lib/types/lib/client.d.ts"), "utf8"), /plan\(options\?: PlanOptions, callbacks\?: PlanCallbacks\): Promise<PlanResult>/);
     assert.match(readFileSync(join(root, "www/dist-lib/types/lib/client.d.ts"), "utf8"), /planFlank\(options\?: FlankOptions, callbacks\?: PlanCallbacks\): Promise<FlankResult>/);
     assert.match(types, /FlankReport/);
+  });
+
+  it("loads STEP bytes (issue 36): the faces come with the part, faces that are not one surface are refused with them, selectFaces and planCoons plan", async () => {
+    const r = await page.evaluate(async () => {
+      const { SlitpathPlanner, StepSelectionError } = await import("./lib/slitpath.js");
+      const planner = new SlitpathPlanner();
+      const bytes = await (await fetch("band.step")).arrayBuffer();
+      const part = await planner.load(bytes, { name: "band.step" });
+      const ids = part.step.faces.map((f) => f.id);
+      let refused = null;
+      try {
+        await planner.load(bytes, { name: "band.step", stepOptions: { faces: [ids[0], ids[2]] } });
+      } catch (error) {
+        refused = { isStepError: error instanceof StepSelectionError, faces: error.step?.faces.length, message: error.message };
+      }
+      const two = await planner.selectFaces([ids[0], ids[1]]);
+      const band = await planner.planCoons(ids, { verifySamples: 5000 });
+      let notBand = "";
+      try {
+        await planner.planCoons(ids.slice(0, 3), { verifySamples: 0 });
+      } catch (error) {
+        notBand = error.message;
+      }
+      planner.dispose();
+      return {
+        faces: ids.length,
+        faceOfTriangle: part.step.drawing.faceOfTriangle.length,
+        partFaces: part.stepFaces.length,
+        refused,
+        selected: two.stepFaces,
+        twoIds: [ids[0], ids[1]],
+        revolutions: band.report.revolutions,
+        contacts: band.pathContacts instanceof Float64Array ? band.pathContacts.length : -1,
+        gcode: band.gcode.length,
+        notBand,
+      };
+    });
+    assert.equal(r.faces, 8);
+    assert.ok(r.faceOfTriangle > 10000, JSON.stringify(r));
+    assert.equal(r.partFaces, 8);
+    // Two faces that share no edge are not one surface: refused, with the file's faces.
+    assert.deepEqual([r.refused?.isStepError, r.refused?.faces], [true, 8], JSON.stringify(r.refused));
+    assert.deepEqual(r.selected, r.twoIds);
+    assert.equal(r.revolutions, 71);
+    assert.ok(r.contacts > 3000 && r.gcode > 10000, JSON.stringify(r));
+    assert.match(r.notBand, /band/);
   });
 
   it("plans flank strips (seed 002): tips, axes and strips as typed arrays, the verifier's figures, the program; a bad tool is refused", async () => {

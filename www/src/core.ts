@@ -2,10 +2,12 @@
 // Everything else imports the types and helpers it needs from here, never from ../pkg, so the
 // rest of the page does not depend on how the core is built. It runs inside the worker.
 
-import init, { Planner, planFlank as corePlanFlank, version } from "../pkg/slitpath.js";
+import init, { Planner, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, stepFaces as coreStepFaces, version } from "../pkg/slitpath.js";
 import type { FlankOptions, FlankOutput, FlankReport } from "./flank-types";
+import type { CoonsOptions, CoonsOutput, CoonsReport, StepFace, StepFacesOutput, StepOptions } from "./step-types";
 
 export type * from "./flank-types";
+export type * from "./step-types";
 
 /** Options of the mesh stage; every field is optional (defaults live in the Rust core). */
 export interface MeshOptions {
@@ -271,6 +273,12 @@ export class Part {
     return new Part(new Planner(stl, options, onProgress));
   }
 
+  /** Reads the faces `stepOptions.faces` (default all) of a STEP file as the part; throws naming the `#id` at fault. */
+  static async openStep(step: Uint8Array, options?: MeshOptions, stepOptions?: StepOptions): Promise<Part> {
+    await initCore();
+    return new Part(Planner.fromStep(step, options, stepOptions));
+  }
+
   /**
    * Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index),
    * reporting each step; throws for a surface that cannot be planned (closed, genus > 0).
@@ -344,9 +352,9 @@ export class Part {
  * message names the fault (bad tool, rigidity not reached, …). The flank planner needs only the
  * mesh, not the slit map: it reads the STL itself.
  */
-export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback): Promise<FlankOutput> {
+export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback, stepOptions?: StepOptions): Promise<FlankOutput> {
   await initCore();
-  const plan = corePlanFlank(stl, meshOptions, options, onProgress);
+  const plan = corePlanFlank(stl, meshOptions, options, onProgress, stepOptions);
   try {
     return {
       report: plan.report() as FlankReport,
@@ -360,6 +368,57 @@ export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | unde
       contactPoints: plan.contactPoints(),
       contactSamples: plan.contactSamples(),
       posesPerStrip: plan.posesPerStrip(),
+    };
+  } finally {
+    plan.free();
+  }
+}
+
+/** Whether the bytes are a STEP file (by content: `ISO-10303-21;`). */
+export async function isStep(bytes: Uint8Array): Promise<boolean> {
+  await initCore();
+  return coreIsStep(bytes);
+}
+
+/** The faces of a STEP file, tessellated (all, or `stepOptions.faces`); throws naming the `#id` at fault. */
+export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onProgress?: ProgressCallback): Promise<StepFacesOutput> {
+  await initCore();
+  const out = coreStepFaces(step, stepOptions, onProgress) as {
+    faces: StepFace[];
+    positions: number[];
+    triangles: number[];
+    face_of_triangle: number[];
+    chordal_error_mm: number;
+    read_ms: number;
+    tessellate_ms: number;
+  };
+  return {
+    faces: out.faces,
+    positions: Float32Array.from(out.positions),
+    triangles: Uint32Array.from(out.triangles),
+    faceOfTriangle: Float64Array.from(out.face_of_triangle),
+    chordalErrorMm: out.chordal_error_mm,
+    readMs: out.read_ms,
+    tessellateMs: out.tessellate_ms,
+  };
+}
+
+/**
+ * Plans seed 004's Coons spiral over the band of STEP faces `faces`; throws an Error whose message
+ * says why when the faces are not a closed band of four-sided faces.
+ */
+export async function planCoons(step: Uint8Array, faces: number[], options: CoonsOptions): Promise<CoonsOutput> {
+  await initCore();
+  const plan = corePlanCoons(step, Float64Array.from(faces), options);
+  try {
+    return {
+      report: plan.report() as CoonsReport,
+      gcode: plan.gcode(),
+      pathContacts: plan.pathContacts(),
+      pathNormals: plan.pathNormals(),
+      pathFaces: plan.pathFaces(),
+      pathTips: plan.tips(),
+      pathAxes: plan.axes(),
     };
   } finally {
     plan.free();

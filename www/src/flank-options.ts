@@ -1,11 +1,11 @@
-// The page's strategy (spiral or flank) and flank options in the URL query and localStorage,
+// The page's strategy (spiral, flank or Coons band) and flank options in the URL query and localStorage,
 // beside the spiral's (options.ts): `strategy=flank` and `flank-*` parameters, only what differs
 // from the defaults. Also the CLI arguments of a flank plan (shown on the page, used by the tests).
 
 import type { Vec3 } from "./core";
 import { DEFAULT_FLANK_OPTIONS, type FlankFormOptions } from "./lib/defaults";
 
-export type Strategy = "spiral" | "flank";
+export type Strategy = "spiral" | "flank" | "coons";
 
 type Key = keyof FlankFormOptions;
 
@@ -84,7 +84,7 @@ export function flankFromQuery(search: string, base: { strategy: Strategy; flank
     if (value !== undefined) flank[key] = value;
   }
   const s = params.get("strategy");
-  return { strategy: s === "flank" || s === "spiral" ? s : base.strategy, flank: flank as unknown as FlankFormOptions };
+  return { strategy: s === "flank" || s === "spiral" || s === "coons" ? s : base.strategy, flank: flank as unknown as FlankFormOptions };
 }
 
 /** Query parameters of the strategy and flank options that differ from the defaults. */

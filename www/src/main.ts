@@ -5,11 +5,16 @@
 // a failure never removes the last good plan.
 
 import "./style.css";
-import { CancelledError, SlitpathPlanner, type FlankResult, type LoadedPart, type PlanResult } from "./lib/index";
+import { CancelledError, SlitpathPlanner, StepSelectionError, type CoonsResult, type FlankResult, type LoadedPart, type PlanResult } from "./lib/index";
 import { DEFAULT_FLANK_OPTIONS, flankOptions, type FlankFormOptions, type FullPlanOptions } from "./lib/defaults";
 import { flankCliArguments, flankFromQuery, flankQuery, type Strategy } from "./flank-options";
 import { cliArguments, initialOptions, persist, storedQuery } from "./options";
-import { BLADE_PRESET, BLADE_SAMPLE } from "./samples";
+import { BLADE_PRESET, BLADE_SAMPLE, STEP_SAMPLE } from "./samples";
+import { coonsCliArguments, coonsFromQuery, coonsOptions, coonsQuery, DEFAULT_COONS_OPTIONS, type CoonsFormOptions } from "./coons-options";
+import { CoonsForm } from "./ui/coons-form";
+import { renderCoonsMetrics } from "./ui/coons-metrics";
+import { FaceList } from "./ui/face-list";
+import { StepPage, facesFromQuery } from "./step-page";
 import { FlankForm } from "./ui/flank-form";
 import { renderFlankMetrics } from "./ui/flank-metrics";
 import { byId } from "./ui/dom";
@@ -47,6 +52,11 @@ const form = new OptionsForm(byId("options"), options);
 // The strategy and the flank options: defaults, then localStorage, then the URL (like the spiral's).
 let { strategy, flank } = flankFromQuery(location.search, flankFromQuery(storedQuery(), { strategy: "spiral", flank: { ...DEFAULT_FLANK_OPTIONS } }));
 const flankForm = new FlankForm(byId("flank-options"), flank);
+let coons: CoonsFormOptions = coonsFromQuery(location.search, coonsFromQuery(storedQuery(), { ...DEFAULT_COONS_OPTIONS }));
+const coonsForm = new CoonsForm(byId("coons-options"), coons);
+const stepPage = new StepPage(views, new FaceList(byId("face-list")));
+/** Faces asked for in the URL (applied to the first STEP file loaded). */
+let urlFaces = facesFromQuery(location.search);
 const strategySelect = byId<HTMLSelectElement>("opt-strategy");
 
 /**
@@ -54,7 +64,13 @@ const strategySelect = byId<HTMLSelectElement>("opt-strategy");
  * big arrays went to the render worker: what stays here is the report, the G-code and counts.
  */
 let part: { loaded: LoadedPart; generation: number } | null = null;
-let shown: { gcode: string; strategy: "spiral"; options: FullPlanOptions } | { gcode: string; strategy: "flank"; flank: FlankFormOptions } | null = null;
+let shown:
+  | { gcode: string; strategy: "spiral"; options: FullPlanOptions }
+  | { gcode: string; strategy: "flank"; flank: FlankFormOptions }
+  | { gcode: string; strategy: "coons"; coons: CoonsFormOptions; faces: number[] }
+  | null = null;
+/** The name of the file loaded last (a STEP file may have no part yet: its faces are not one surface). */
+let fileName = "";
 let generation = 0;
 let planning = false;
 let replanWanted = false;
@@ -89,57 +105,105 @@ function lastGood(): string {
 }
 
 async function loadStl(name: string, read: (onProgress: (fraction: number) => void) => Promise<ArrayBuffer>): Promise<void> {
+  const asked = urlFaces;
   setStatus("loading", `reading ${name}`);
   showProgress(`reading ${name}`, 0);
   try {
     const bytes = await read((fraction) => showProgress(`reading ${name}`, fraction));
     showProgress(`checking ${name}`, null);
+    urlFaces = null;
     const loaded = await planner.load(
       bytes,
-      { name },
+      asked ? { name, stepOptions: { faces: asked } } : { name },
       { onProgress: (stage, done, total) => showProgress(`${stage} (${name})`, total > 0 ? done / total : null) },
     );
-    part = { loaded, generation: ++generation };
+    fileName = name;
     shown = null;
-    byId("part-name").textContent = `${name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces`;
-    renderReport(byId("report"), loaded.report, name);
-    form.setHoles(Math.max(0, loaded.loops.length - 1));
-    views.setPart(loaded);
+    if (loaded.step) stepPage.show(loaded.step, loaded.stepFaces);
+    else stepPage.clear();
+    showPart(loaded);
+    showState();
     renderNoPlan(metricsBox, "Planning…");
     setOutputs();
     void plan();
   } catch (error) {
     hideProgress();
+    if (error instanceof StepSelectionError) {
+      // The file's faces are shown for picking; no part of them yet.
+      fileName = name;
+      shown = null;
+      part = null;
+      ++generation;
+      stepPage.show(error.step, asked);
+      stepPage.setPart(null);
+      byId("part-name").textContent = `${name} — ${error.step.faces.length} STEP faces`;
+      setOutputs();
+      showState();
+      renderNoPlan(metricsBox, "No plan: pick the faces to machine (click them in the 3D view or tick them in the face list).");
+      return setStatus(`error: ${error.message}`, `${name}: pick the faces to machine.`);
+    }
     if (error instanceof CancelledError) return setStatus("cancelled", `loading ${name} was cancelled.`);
     setStatus(`error: ${message(error)}`, `${name} was not loaded.${lastGood()}`);
   }
 }
 
+/** Shows a part made ready by the worker (an STL, or STEP faces): its report and surface. */
+function showPart(loaded: LoadedPart): void {
+  part = { loaded, generation: ++generation };
+  const faces = loaded.stepFaces ? ` (${loaded.stepFaces.length} STEP faces)` : "";
+  byId("part-name").textContent = `${loaded.name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces${faces}`;
+  renderReport(byId("report"), loaded.report, loaded.name);
+  form.setHoles(Math.max(0, loaded.loops.length - 1));
+  views.setPart(loaded);
+  stepPage.setPart(loaded.stepFaces);
+}
+
 /** Plans the shown part with the current options; an edit during a plan re-plans right after. */
 async function plan(): Promise<void> {
   window.clearTimeout(replanTimer);
-  if (part === null) return;
+  if (part === null && !stepPage.isStep()) return;
   if (planning) {
     replanWanted = true;
     return;
   }
   planning = true;
-  const mine = part;
+  const mine = generation;
   const planned = { ...options };
   const flanked = { ...flank };
+  const banded = { ...coons };
   setStatus("planning", "");
   showProgress("planning", null);
   const onProgress = (stage: string, done: number, total: number) => showProgress(`${stage} ${done}/${total}`, total > 0 ? done / total : null);
   try {
-    if (strategy === "flank") {
-      const result = await planner.planFlank(flankOptions(flanked), { onProgress });
-      if (part?.generation === mine.generation) await showFlank(result, flanked);
+    stepPage.setSurfaceHidden(strategy === "coons");
+    if (strategy === "coons") {
+      if (!stepPage.isStep()) throw new Error("the Coons band strategy needs a STEP file (its exact faces): open a .step or .stp part, or try the STEP blade band");
+      const faces = stepPage.selection();
+      const result = await planner.planCoons(faces, coonsOptions(banded), { onProgress });
+      if (generation === mine) await showCoons(result, banded);
     } else {
-      const result = await planner.plan(planned, { onProgress });
-      if (part?.generation === mine.generation) await show(result, planned);
+      // STEP input: the selected faces become the part first (when they changed).
+      if (stepPage.isStep() && !stepPage.partIsSelection()) {
+        showProgress("meshing the selected faces", null);
+        showPart(await planner.selectFaces(stepPage.selection(), { onProgress }));
+      }
+      if (part === null) throw new Error("no part is loaded");
+      const current = generation;
+      if (strategy === "flank") {
+        const result = await planner.planFlank(flankOptions(flanked), { onProgress });
+        if (generation === current) await showFlank(result, flanked);
+      } else {
+        const result = await planner.plan(planned, { onProgress });
+        if (generation === current) await show(result, planned);
+      }
     }
   } catch (error) {
     if (error instanceof CancelledError) setStatus("cancelled", `Planning was cancelled.${lastGood()}`);
+    else if (strategy === "coons" && stepPage.isStep())
+      setStatus(
+        `error: ${message(error)}`,
+        `Seed 004 needs a closed band of four-sided faces. The spiral strategy plans the selected faces on their tessellation.${lastGood()}`,
+      );
     else setStatus(`error: ${message(error)}`, `Not planned.${lastGood()}`);
     if (shown === null) renderNoPlan(metricsBox, "No plan: see the message beside the part.");
   } finally {
@@ -201,32 +265,72 @@ async function showFlank(result: FlankResult, planned: FlankFormOptions): Promis
   setStatus("planned", `${name}: flank, ${result.report.guide.strips} strips, ${output.moves} moves, ${(output.estimated_time_s / 60).toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
+/** Shows a Coons band plan: the path on the STEP faces, the tool and its axes. */
+async function showCoons(result: CoonsResult, planned: CoonsFormOptions): Promise<void> {
+  shown = { gcode: result.gcode, strategy: "coons", coons: planned, faces: result.faces };
+  showStrategy("coons");
+  renderCoonsMetrics(metricsBox, result);
+  const points = result.pathContacts.length / 3;
+  const drawn = views.setCoons(result, planned.radiusMm, planned.axes === 5); // transfers the arrays it draws
+  scrub.max = String(Math.max(0, points - 1));
+  scrub.value = "0";
+  scrub.disabled = points === 0;
+  setCursor(0);
+  legend.hidden = true;
+  setOutputs();
+  const r = result.report;
+  await drawn;
+  setStatus("planned", `${fileName}: Coons band, ${r.revolutions} revolutions, ${r.length_mm.toFixed(0)} mm, ${r.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
+}
+
 /** What the shown plan's strategy needs of the page: the 2D slit map only for the spiral. */
 function showStrategy(shownStrategy: Strategy): void {
-  document.body.classList.toggle("flank-shown", shownStrategy === "flank");
+  document.body.classList.toggle("flank-shown", shownStrategy !== "spiral");
   byId("layer-heat-label").textContent = shownStrategy === "flank" ? "deviation heat map" : "scallop heat map";
 }
 
 function setOutputs(): void {
   downloadGcode.disabled = downloadCl.disabled = shown === null;
-  const post = shown === null ? (strategy === "flank" ? flank.post : options.post) : shown.strategy === "flank" ? shown.flank.post : shown.options.post;
+  const post = shown === null ? postOf(strategy) : shownPost();
   downloadGcode.textContent = post === "cl" ? "Download CL data" : `Download G-code (${post})`;
+}
+
+const postOf = (s: Strategy) => (s === "flank" ? flank.post : s === "coons" ? coons.post : options.post);
+
+function shownPost(): FullPlanOptions["post"] {
+  if (shown === null) return postOf(strategy);
+  return shown.strategy === "flank" ? shown.flank.post : shown.strategy === "coons" ? shown.coons.post : shown.options.post;
 }
 
 function setCursor(index: number): void {
   const points = Number(scrub.max) + 1;
   // A flank plan has no path points to scrub (its strips are drawn whole).
-  scrubLabel.textContent = shown?.strategy === "spiral" ? `point ${index + 1} of ${points}` : "";
+  scrubLabel.textContent = shown !== null && shown.strategy !== "flank" ? `point ${index + 1} of ${points}` : "";
 }
 
 function optionsChanged(next: FullPlanOptions, now = false): void {
   options = next;
-  persist(options, flankQuery(strategy, flank));
-  byId("cli-command").textContent =
-    strategy === "flank" ? `slitpath flank PART.stl ${flankCliArguments(flank).join(" ")}` : `slitpath plan PART.stl ${cliArguments(options).join(" ")}`;
+  showState();
   window.clearTimeout(replanTimer);
   if (now) void plan();
   else replanTimer = window.setTimeout(() => void plan(), REPLAN_DELAY_MS);
+}
+
+/** Puts the options (and a STEP selection) in the URL and localStorage, and shows the CLI command. */
+function showState(): void {
+  const faces: [string, string][] = stepPage.isStep() && !stepPage.allSelected() ? [["faces", stepPage.selection().join(",")]] : [];
+  persist(options, [...flankQuery(strategy, flank), ...coonsQuery(coons), ...faces]);
+  byId("cli-command").textContent = cliCommand();
+}
+
+/** The `slitpath` command of the current strategy and options (STEP: with the selected faces). */
+function cliCommand(): string {
+  const step = stepPage.isStep();
+  const file = step ? "PART.step" : "PART.stl";
+  const faces = step && !stepPage.allSelected() ? ` --faces ${stepPage.selection().join(",")}` : "";
+  if (strategy === "coons") return `slitpath coons ${file} ${coonsCliArguments(stepPage.selection(), coons).join(" ")}`;
+  if (strategy === "flank") return `slitpath flank ${file}${faces} ${flankCliArguments(flank).join(" ")}`;
+  return `slitpath plan ${file}${faces} ${cliArguments(options).join(" ")}`;
 }
 
 /** Shows the strategy's options (and plans with it unless `plan` is false). */
@@ -235,13 +339,14 @@ function strategyChanged(next: Strategy, plan = true): void {
   strategySelect.value = next;
   byId("options").hidden = next !== "spiral";
   byId("flank-options").hidden = next !== "flank";
-  document.body.classList.toggle("flank-on", next === "flank");
+  byId("coons-options").hidden = next !== "coons";
+  document.body.classList.toggle("flank-on", next !== "spiral");
   if (plan) optionsChanged(options, true);
 }
 
 /** `part.stl` → `part.ngc` (LinuxCNC, AC), `part.nc` (GRBL), `part.cls` (CL data). */
 function outputName(post: FullPlanOptions["post"]): string {
-  const base = (part?.loaded.name ?? "part.stl").replace(/\.stl$/i, "") || "part";
+  const base = (fileName || "part.stl").replace(/\.(stl|step|stp)$/i, "") || "part";
   const ext = { linuxcnc: "ngc", grbl: "nc", ac: "ngc", cl: "cls" }[post];
   return `${base}.${ext}`;
 }
@@ -253,7 +358,13 @@ flankForm.onChange = (next) => {
   optionsChanged(options);
 };
 flankForm.onInvalid = form.onInvalid;
-strategySelect.addEventListener("change", () => strategyChanged(strategySelect.value === "flank" ? "flank" : "spiral"));
+coonsForm.onChange = (next) => {
+  coons = next;
+  optionsChanged(options);
+};
+coonsForm.onInvalid = form.onInvalid;
+stepPage.onChange = () => optionsChanged(options);
+strategySelect.addEventListener("change", () => strategyChanged(strategySelect.value as Strategy));
 strategyChanged(strategy, false);
 optionsChanged(options, false);
 window.clearTimeout(replanTimer); // the first plan follows the first load
@@ -297,16 +408,21 @@ byId("legend-bar").style.background = heatGradientCss();
 byId("cancel").addEventListener("click", () => planner.cancel());
 
 downloadGcode.addEventListener("click", () => {
-  if (shown) saveText(shown.gcode, outputName(shown.strategy === "flank" ? shown.flank.post : shown.options.post));
+  if (shown) saveText(shown.gcode, outputName(shownPost()));
 });
 downloadCl.addEventListener("click", async () => {
   if (!shown) return;
-  const post = shown.strategy === "flank" ? shown.flank.post : shown.options.post;
-  if (post === "cl") return saveText(shown.gcode, outputName("cl"));
+  if (shownPost() === "cl") return saveText(shown.gcode, outputName("cl"));
   showProgress("CL data", null);
   try {
     // The same plan through the CL post: what `--post cl` writes.
-    const cl = shown.strategy === "flank" ? await planner.planFlank(flankOptions({ ...shown.flank, post: "cl" })) : await planner.plan({ ...shown.options, post: "cl" });
+    const s = shown;
+    const cl =
+      s.strategy === "flank"
+        ? await planner.planFlank(flankOptions({ ...s.flank, post: "cl" }))
+        : s.strategy === "coons"
+          ? await planner.planCoons(s.faces, coonsOptions({ ...s.coons, post: "cl" }))
+          : await planner.plan({ ...s.options, post: "cl" });
     saveText(cl.gcode, outputName("cl"));
   } catch (error) {
     if (!(error instanceof CancelledError)) setStatus(`error: ${message(error)}`, "No CL data.");
@@ -318,7 +434,7 @@ downloadCl.addEventListener("click", async () => {
 const fetchSample = (url: string) => async (onProgress: (fraction: number) => void): Promise<ArrayBuffer> => {
   const response = await fetch(url);
   const type = response.headers.get("content-type") ?? "";
-  // A dev server answers unknown paths with the page itself: that is not an STL either.
+  // A dev server answers unknown paths with the page itself: that is not a part either.
   if (!response.ok || type.includes("text/html")) {
     throw new Error(`the sample part ${url} is missing (npm start generates it)`);
   }
@@ -346,6 +462,13 @@ byId("load-blade").addEventListener("click", () => {
   optionsChanged(options);
   window.clearTimeout(replanTimer); // the plan follows the load
   void loadStl(BLADE_SAMPLE, fetchSample(`samples/${BLADE_SAMPLE}`));
+});
+// The STEP sample: seed 004's blade band (4 × 2 B-spline faces), planned with the Coons band spiral.
+byId("load-step").addEventListener("click", () => {
+  strategyChanged("coons", false);
+  optionsChanged(options);
+  window.clearTimeout(replanTimer); // the plan follows the load
+  void loadStl(STEP_SAMPLE, fetchSample(`samples/${STEP_SAMPLE}`));
 });
 
 // Drag and drop anywhere on the page.

@@ -10,6 +10,9 @@ import { DEFAULT_FLANK_OPTIONS } from "./lib/defaults";
 
 export const BLADE_SAMPLE = "blade.stl";
 
+/** The STEP sample (`slitpath fixture step:blade_band`): seed 004's blade over its fillet, 4 × 2 B-spline faces. */
+export const STEP_SAMPLE = "blade_band.step";
+
 export const BLADE_PRESET: Readonly<FlankFormOptions> = Object.freeze({
   ...DEFAULT_FLANK_OPTIONS,
   tipRadiusMm: 2.87,

@@ -2,14 +2,29 @@
 // embeds. One promise per request; cancel() (and a trap in the core) replaces the worker and
 // reloads the last part into the new one, so the planner stays usable.
 
-import type { FlankOptions, MeshOptions, PlanOptions } from "../core";
-import type { FlankResult, LoadedPart, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
+import type { CoonsOptions, FlankOptions, MeshOptions, PlanOptions, StepOptions } from "../core";
+import type { CoonsResult, FlankResult, LoadedPart, PlanResult, StepPart, WorkerRequest, WorkerResponse } from "./protocol";
 
 /** Rejection reason of requests that were cancelled (by `cancel()` or a newer request). */
 export class CancelledError extends Error {
   constructor() {
     super("cancelled");
     this.name = "CancelledError";
+  }
+}
+
+/**
+ * `load()` of a STEP file whose faces (all, or `stepOptions.faces`) cannot be made the part (a
+ * closed solid, faces apart, …): the message says why; `step` holds the file's faces, so the
+ * caller can show them and choose others with `selectFaces()`.
+ */
+export class StepSelectionError extends Error {
+  constructor(
+    message: string,
+    readonly step: StepPart,
+  ) {
+    super(message);
+    this.name = "StepSelectionError";
   }
 }
 
@@ -22,7 +37,11 @@ export interface LoadOptions {
   /** Shown in messages and used for file names. Default "part.stl". */
   name?: string;
   meshOptions?: MeshOptions;
+  /** STEP input: the faces to machine (default all, when they form one open surface) and the tessellation. */
+  stepOptions?: StepOptions;
 }
+
+type Kept = { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions; stepOptions?: StepOptions };
 
 export interface PlanCallbacks {
   /** Called as each step starts (loading: read, checks, flattening, factorisation, …; planning: origin, spacing, …). */
@@ -39,7 +58,7 @@ export class SlitpathPlanner {
   private worker: Worker;
   private nextId = 1;
   private readonly pending = new Map<number, Pending>();
-  private last: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions } | undefined;
+  private last: Kept | undefined;
   private versionPromise: Promise<string>;
   private resolveVersion: (version: string) => void = () => {};
 
@@ -57,13 +76,18 @@ export class SlitpathPlanner {
   }
 
   /**
-   * Reads an STL (binary or ASCII), checks and flattens it and factorises its slit map, reporting
-   * each step. The bytes are copied (kept to reload after a cancel).
+   * Reads an STL (binary or ASCII) or a STEP file (AP203/214/242, detected by content), checks and
+   * flattens it and factorises its slit map, reporting each step. The bytes are copied (kept to
+   * reload after a cancel). A STEP part is made of `options.stepOptions.faces` (default all) and
+   * comes with all the file's faces (`part.step`); when those faces cannot be the part, the
+   * promise rejects with a `StepSelectionError` that holds them.
    */
   load(stl: ArrayBuffer | Uint8Array, options: LoadOptions = {}, callbacks: PlanCallbacks = {}): Promise<LoadedPart> {
     const bytes = stl instanceof Uint8Array ? stl.slice().buffer : stl.slice(0);
     const name = options.name ?? "part.stl";
-    const kept = options.meshOptions ? { bytes, name, meshOptions: options.meshOptions } : { bytes, name };
+    const kept: Kept = { bytes, name };
+    if (options.meshOptions) kept.meshOptions = options.meshOptions;
+    if (options.stepOptions) kept.stepOptions = options.stepOptions;
     const promise = this.sendLoad(kept, callbacks.onProgress);
     // Only a part that loaded is reloaded after a cancel.
     promise.then(() => (this.last = kept), () => {});
@@ -83,6 +107,25 @@ export class SlitpathPlanner {
    */
   planFlank(options: FlankOptions = {}, callbacks: PlanCallbacks = {}): Promise<FlankResult> {
     return this.request<FlankResult>({ type: "flank", id: this.nextId++, options }, [], callbacks.onProgress);
+  }
+
+  /**
+   * STEP input: makes the faces `faces` (STEP ids) of the loaded file the part (planned by `plan()`
+   * and `planFlank()`), like a new load. Rejects when they cannot be (not one open surface, …).
+   */
+  selectFaces(faces: number[], callbacks: PlanCallbacks = {}): Promise<LoadedPart> {
+    const promise = this.request<LoadedPart>({ type: "selectFaces", id: this.nextId++, faces: [...faces] }, [], callbacks.onProgress);
+    promise.then(() => this.last && (this.last = { ...this.last, stepOptions: { ...this.last.stepOptions, faces: [...faces] } }), () => {});
+    return promise;
+  }
+
+  /**
+   * STEP input: seed 004's spiral over the closed band of four-sided faces `faces` (STEP ids) of
+   * the loaded file (`slitpath coons`). Rejects with the reason when they are not such a band (the
+   * slit-map spiral, `plan()`, plans any open surface).
+   */
+  planCoons(faces: number[], options: CoonsOptions = {}, callbacks: PlanCallbacks = {}): Promise<CoonsResult> {
+    return this.request<CoonsResult>({ type: "coons", id: this.nextId++, faces: [...faces], options }, [], callbacks.onProgress);
   }
 
   /** E_min of a pole (x, y) of the flattened plane (waits for a running plan). */
@@ -106,10 +149,12 @@ export class SlitpathPlanner {
     this.failAll(new CancelledError());
   }
 
-  private sendLoad(part: { bytes: ArrayBuffer; name: string; meshOptions?: MeshOptions }, onProgress?: Pending["onProgress"]): Promise<LoadedPart> {
+  private sendLoad(part: Kept, onProgress?: Pending["onProgress"]): Promise<LoadedPart> {
     const bytes = part.bytes.slice(0); // the copy is transferred, the original kept
-    const base = { type: "load" as const, id: this.nextId++, name: part.name, bytes };
-    return this.request<LoadedPart>(part.meshOptions ? { ...base, meshOptions: part.meshOptions } : base, [bytes], onProgress);
+    const message: WorkerRequest = { type: "load", id: this.nextId++, name: part.name, bytes };
+    if (part.meshOptions) message.meshOptions = part.meshOptions;
+    if (part.stepOptions) message.stepOptions = part.stepOptions;
+    return this.request<LoadedPart>(message, [bytes], onProgress);
   }
 
   private request<T>(message: WorkerRequest, transfer: Transferable[] = [], onProgress?: Pending["onProgress"]): Promise<T> {
@@ -146,6 +191,7 @@ export class SlitpathPlanner {
         return this.settle(message.id, message.part);
       case "planned":
       case "flanked":
+      case "coonsPlanned":
         return this.settle(message.id, message.plan);
       case "energy":
         return this.settle(message.id, message.value);
@@ -157,7 +203,7 @@ export class SlitpathPlanner {
           this.onFailure(message.message);
           return;
         }
-        this.take(message.id)?.reject(new Error(message.message));
+        this.take(message.id)?.reject(message.step ? new StepSelectionError(message.message, message.step) : new Error(message.message));
         // A trap leaves the wasm instance unusable.
         if (message.fatal) this.restart(new Error(`the planner core stopped (${message.message}); it was restarted`));
         return;

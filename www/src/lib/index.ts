@@ -14,13 +14,21 @@
 //   flank.vertexDeviation;             // Float64Array per vertex of flank.positions / triangles
 //   flank.gcode;                       // A/C G-code (post "ac") or CL data (post "cl")
 
-export { SlitpathPlanner, CancelledError } from "./client";
+//
+// STEP input (issue 36): `load()` takes STEP bytes too (its faces in `part.step`); `selectFaces()`
+// chooses the faces to machine and `planCoons(faces)` plans seed 004's spiral over a closed band
+// of four-sided faces.
+
+export { SlitpathPlanner, CancelledError, StepSelectionError } from "./client";
 export type { PlannerOptions, LoadOptions, PlanCallbacks } from "./client";
-export type { FlankResult, LoadedPart, PartDrawing, PlanDrawing, PlanResult } from "./protocol";
+export type { CoonsResult, FlankResult, LoadedPart, PartDrawing, PlanDrawing, PlanResult, StepPart } from "./protocol";
+export type { CoonsDrawing } from "./coons-drawing";
+export type { StepDrawing } from "./step-drawing";
 export type { FlankDrawing } from "./flank-drawing";
 export type { Polyline } from "./drawing";
 export type { PointGrid } from "./point-grid";
 export type { MeshOptions, MeshReport, PlanOptions, PlanReport, PlanOutput, OriginOption, Vec2, Vec3 } from "../core";
 export type { FlankOptions, FlankOutput, FlankReport, FlankVerification, FlankSeam, FlankStripDeviation, FlankGridFigures } from "../core";
+export type { CoonsOptions, CoonsOutput, CoonsReport, CoonsJumps, StepFace, StepOptions } from "../core";
 export { DEFAULT_PLAN_OPTIONS, DEFAULT_FLANK_OPTIONS, flankOptions } from "./defaults";
 export type { FlankFormOptions } from "./defaults";

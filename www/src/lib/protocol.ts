@@ -1,8 +1,10 @@
 // Messages between the main thread (SlitpathPlanner) and the planner worker. Types only.
 
-import type { FlankOptions, FlankOutput, MeshOptions, MeshReport, PlanOptions, PlanOutput } from "../core";
+import type { CoonsOptions, CoonsOutput, FlankOptions, FlankOutput, MeshOptions, MeshReport, PlanOptions, PlanOutput, StepFace, StepOptions } from "../core";
+import type { CoonsDrawing } from "./coons-drawing";
 import type { Polyline } from "./drawing";
 import type { FlankDrawing } from "./flank-drawing";
+import type { StepDrawing } from "./step-drawing";
 import type { PointGrid } from "./point-grid";
 
 /** A part as loaded by the worker: its report, the surface to draw, and its conformal preview. */
@@ -28,6 +30,31 @@ export interface LoadedPart {
   /** Time to read, check and flatten, ms. */
   ms: number;
   /** The core's linear memory after loading (its peak so far), bytes. */
+  wasmMemoryBytes: number;
+  /** A STEP file: the STEP ids of the faces this surface is made of (else null). */
+  stepFaces: number[] | null;
+  /** A STEP file just loaded: all its faces (else null; `selectFaces` leaves it null). */
+  step: StepPart | null;
+}
+
+/** A STEP file's faces as read by the worker: the list and the 3D view's arrays to pick them. */
+export interface StepPart {
+  name: string;
+  faces: StepFace[];
+  drawing: StepDrawing;
+  /** The tessellation's measured chordal error, mm; read and tessellation times, ms. */
+  chordalErrorMm: number;
+  readMs: number;
+  tessellateMs: number;
+}
+
+/** A Coons band plan's outputs plus what the 3D view draws of it (computed in the worker). */
+export interface CoonsResult extends CoonsOutput {
+  /** The faces planned, in the order given. */
+  faces: number[];
+  drawing: CoonsDrawing;
+  /** Wall time of the plan in the worker, ms. */
+  ms: number;
   wasmMemoryBytes: number;
 }
 
@@ -85,7 +112,9 @@ export interface FlankResult extends FlankOutput {
 }
 
 export type WorkerRequest =
-  | { type: "load"; id: number; name: string; bytes: ArrayBuffer; meshOptions?: MeshOptions }
+  | { type: "load"; id: number; name: string; bytes: ArrayBuffer; meshOptions?: MeshOptions; stepOptions?: StepOptions }
+  | { type: "selectFaces"; id: number; faces: number[] }
+  | { type: "coons"; id: number; faces: number[]; options: CoonsOptions }
   | { type: "plan"; id: number; options: PlanOptions }
   | { type: "flank"; id: number; options: FlankOptions }
   | { type: "energy"; id: number; x: number; y: number }
@@ -97,6 +126,8 @@ export type WorkerResponse =
   | { type: "progress"; id: number; stage: string; done: number; total: number }
   | { type: "planned"; id: number; plan: PlanResult }
   | { type: "flanked"; id: number; plan: FlankResult }
+  | { type: "coonsPlanned"; id: number; plan: CoonsResult }
   | { type: "energy"; id: number; value: number }
   | { type: "flatPoint"; id: number; point: [number, number] | null }
-  | { type: "error"; id: number | null; message: string; fatal: boolean };
+  /** `step`: a STEP file was read but its faces could not be made the part (pick others with `selectFaces`). */
+  | { type: "error"; id: number | null; message: string; fatal: boolean; step?: StepPart };

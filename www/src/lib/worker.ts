@@ -6,22 +6,26 @@
 // `self` is typed with the DOM lib (the page's tsconfig); postMessage(message, { transfer }) and
 // the "message" event have the same shape on a DedicatedWorkerGlobalScope.
 
-import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, planFlank, type MeshOptions, type PlanOutput } from "../core";
+import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, isStep, planCoons, planFlank, stepFaces, type MeshOptions, type PlanOutput, type StepFace, type StepOptions } from "../core";
+import { coonsDrawing } from "./coons-drawing";
 import { DEFAULT_PLAN_OPTIONS } from "./defaults";
 import { circles, extent, heatColours, loopEdges, pathPolyline, planar, type Polyline } from "./drawing";
 import { flankDrawing } from "./flank-drawing";
 import { PlanarLocator, matchMoves, pathField } from "./geometry";
 import { buildPointGrid } from "./point-grid";
-import type { FlankResult, LoadedPart, PlanDrawing, PlanResult, WorkerRequest, WorkerResponse } from "./protocol";
+import type { CoonsResult, FlankResult, LoadedPart, PlanDrawing, PlanResult, StepPart, WorkerRequest, WorkerResponse } from "./protocol";
+import { stepDrawing } from "./step-drawing";
 
 /** The part loaded, what the views and the pole pick need of it, and the last plan's map. */
 let current:
   | {
       part: Part;
       name: string;
-      /** The STL and its mesh options: the flank planner reads the mesh itself. */
+      /** The STL (or STEP) and its mesh options: the flank planner reads the mesh itself. */
       bytes: Uint8Array;
       meshOptions: MeshOptions | undefined;
+      /** A STEP file: the faces that make the part. */
+      stepOptions: StepOptions | undefined;
       positions: Float32Array;
       triangles: Uint32Array;
       uv: Float64Array | null;
@@ -30,6 +34,19 @@ let current:
       locator: PlanarLocator | null;
     }
   | undefined;
+
+/** The STEP file loaded last (its faces can be chosen again, and the Coons band reads it). */
+let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; faces: StepFace[] } | undefined;
+
+/** A STEP file could be read but not made the part with the faces asked for: the faces go with the error. */
+class SelectionError extends Error {
+  constructor(
+    message: string,
+    readonly step: StepPart,
+  ) {
+    super(message);
+  }
+}
 
 /**
  * Drawn decimations, as fractions of the drawing's extent (its diagonal): a 2D pane is at most
@@ -54,15 +71,55 @@ function centroid(uv: Float64Array): [number, number] {
   return [x / n, y / n];
 }
 
+/** Loads an STL, or a STEP file (its faces read first, then the faces asked for made the part). */
 async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<void> {
+  const bytes = new Uint8Array(request.bytes);
+  if (!(await isStep(bytes))) {
+    stepFile = undefined;
+    return loadPart(request.id, request.name, bytes, request.meshOptions, undefined, null);
+  }
   const started = performance.now();
+  const progress = (stage: string, done: number) => post({ type: "progress", id: request.id, stage, done, total: 3 });
+  const { faces: _, ...stepOptions } = request.stepOptions ?? {};
+  const read = await stepFaces(bytes, stepOptions, progress);
+  progress("preparing the face view", 2);
+  const step: StepPart = {
+    name: request.name,
+    faces: read.faces,
+    drawing: stepDrawing(read),
+    chordalErrorMm: read.chordalErrorMm,
+    readMs: read.readMs,
+    tessellateMs: read.tessellateMs,
+  };
+  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, faces: read.faces };
+  try {
+    const asked = request.stepOptions?.faces;
+    await loadPart(request.id, request.name, bytes, request.meshOptions, asked ? { ...stepOptions, faces: asked } : stepOptions, step, started);
+  } catch (error) {
+    if (isFatal(error)) throw error;
+    throw new SelectionError(errorMessage(error), step);
+  }
+}
+
+/** Makes the STEP file's faces `faces` the part. */
+async function selectFaces(request: Extract<WorkerRequest, { type: "selectFaces" }>): Promise<void> {
+  if (stepFile === undefined) throw new Error("no STEP file is loaded");
+  if (request.faces.length === 0) throw new Error("no faces are selected: pick the faces to machine");
+  const known = new Set(stepFile.faces.map((f) => f.id));
+  const unknown = request.faces.find((f) => !known.has(f));
+  if (unknown !== undefined) throw new Error(`face #${unknown} is not a face of ${stepFile.name}`);
+  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { faces: request.faces }, null);
+}
+
+async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions: MeshOptions | undefined, stepOptions: StepOptions | undefined, step: StepPart | null, started = performance.now()): Promise<void> {
   // Progress over every step before planning: the core's (read, checks; refinement, flattening,
   // factorisation, facet index), then the preview map and the views' arrays.
   let offset = 0;
   const TOTAL = 8;
-  const progress = (stage: string, done: number) => post({ type: "progress", id: request.id, stage, done: offset + done, total: TOTAL });
-  const bytes = new Uint8Array(request.bytes);
-  const part = await Part.open(bytes, request.meshOptions, progress);
+  const progress = (stage: string, done: number) => post({ type: "progress", id, stage, done: offset + done, total: TOTAL });
+  const isStepPart = stepOptions !== undefined;
+  if (isStepPart) progress("meshing the selected faces", 1);
+  const part = isStepPart ? await Part.openStep(bytes, meshOptions, stepOptions) : await Part.open(bytes, meshOptions, progress);
   current?.part.free();
   current = undefined;
   offset = 2;
@@ -86,17 +143,19 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   current = {
     part,
     // The G-code header names the part like the CLI does: the file name without its extension.
-    name: request.name.replace(/\.[^./\\]*$/, "") || "part",
+    name: name.replace(/\.[^./\\]*$/, "") || "part",
     bytes,
-    meshOptions: request.meshOptions,
+    meshOptions,
+    stepOptions,
     positions,
     triangles: triangles.slice(),
     uv,
     w: previewW,
     locator: null,
   };
+  const stepIds = isStepPart ? (stepOptions.faces ?? stepFile?.faces.map((f) => f.id) ?? null) : null;
   const loaded: LoadedPart = {
-    name: request.name,
+    name,
     report: part.report(),
     positions: positions.slice(),
     triangles,
@@ -113,11 +172,32 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     },
     ms: performance.now() - started,
     wasmMemoryBytes: coreMemoryBytes(),
+    stepFaces: stepIds,
+    step,
   };
   const { drawing: d } = loaded;
   post(
-    { type: "loaded", id: request.id, part: loaded },
-    buffers(loaded.positions, triangles, normals, ...loops, loaded.uv, loaded.previewW, d.uv, d.previewW, d.outerEdges, d.holeEdges),
+    { type: "loaded", id, part: loaded },
+    [...buffers(loaded.positions, triangles, normals, ...loops, loaded.uv, loaded.previewW, d.uv, d.previewW, d.outerEdges, d.holeEdges), ...stepBuffers(step)],
+  );
+}
+
+const stepBuffers = (step: StepPart | null) => (step ? buffers(step.drawing.positions, step.drawing.normals, step.drawing.triangles, step.drawing.faceOfVertex, step.drawing.faceOfTriangle) : []);
+
+/** Seed 004's spiral over a band of the STEP file's faces, and the 3D view's arrays. */
+async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promise<void> {
+  if (stepFile === undefined) throw new Error("the Coons band strategy needs a STEP file: open a .step or .stp part");
+  const started = performance.now();
+  post({ type: "progress", id: request.id, stage: "Coons band spiral", done: 0, total: 2 });
+  const partName = stepFile.name.replace(/\.[^./\\]*$/, "") || "part";
+  const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName });
+  post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
+  const radiusMm = request.options.radiusMm ?? 3;
+  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, radiusMm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
+  const { drawing: d } = result;
+  post(
+    { type: "coonsPlanned", id: request.id, plan: result },
+    [...buffers(result.pathContacts, result.pathNormals, result.pathFaces, result.pathTips, result.pathAxes, d.moveOfPoint), ...[d.path, d.pathCoarse].flatMap(polylineBuffers)],
   );
 }
 
@@ -177,9 +257,14 @@ function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {
 async function flank(request: Extract<WorkerRequest, { type: "flank" }>): Promise<void> {
   if (current === undefined) throw new Error("no part is loaded");
   const started = performance.now();
-  const output = await planFlank(current.bytes, current.meshOptions, { ...request.options, partName: current.name }, (stage, done, total) =>
-    // The views' arrays are the last step, after the core's.
-    post({ type: "progress", id: request.id, stage: stage === "done" ? "preparing the views" : stage, done, total: total + 1 }),
+  const output = await planFlank(
+    current.bytes,
+    current.meshOptions,
+    { ...request.options, partName: current.name },
+    (stage, done, total) =>
+      // The views' arrays are the last step, after the core's.
+      post({ type: "progress", id: request.id, stage: stage === "done" ? "preparing the views" : stage, done, total: total + 1 }),
+    current.stepOptions,
   );
   const result: FlankResult = { ...output, drawing: flankDrawing(output), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
   const { tips, axes, stripMoves, positions, triangles, vertexDeviation, drawing: d } = result;
@@ -201,6 +286,10 @@ async function handle(request: WorkerRequest): Promise<void> {
     switch (request.type) {
       case "load":
         return await load(request);
+      case "selectFaces":
+        return await selectFaces(request);
+      case "coons":
+        return await coons(request);
       case "plan":
         return plan(request);
       case "flank":
@@ -212,7 +301,8 @@ async function handle(request: WorkerRequest): Promise<void> {
         return post({ type: "flatPoint", id: request.id, point: flatPoint(request.x, request.y) });
     }
   } catch (error) {
-    post({ type: "error", id: request.id, message: errorMessage(error), fatal: isFatal(error) });
+    if (error instanceof SelectionError) post({ type: "error", id: request.id, message: error.message, fatal: false, step: error.step }, stepBuffers(error.step));
+    else post({ type: "error", id: request.id, message: errorMessage(error), fatal: isFatal(error) });
   }
 }
 

@@ -1,7 +1,7 @@
 // Messages between the page (Views) and the render worker that owns the two WebGL canvases.
 // Types only. Big arrays cross by transfer.
 
-import type { PartDrawing, PlanDrawing, Vec2 } from "../lib/index";
+import type { CoonsDrawing, PartDrawing, PlanDrawing, Polyline, StepDrawing, Vec2 } from "../lib/index";
 import type { ForwardedEvent } from "./element-proxy";
 
 export type ViewName = "3d" | "2d";
@@ -14,6 +14,30 @@ export interface PartView {
   drawing: PartDrawing;
   /** Why there is no flattening, or null. */
   conformalError: string | null;
+}
+
+/** What the 3D view needs of any path plan (the spiral's or the Coons band's): path, tool, needles. */
+export interface PathView {
+  pathContacts: Float64Array;
+  pathTips: Float64Array;
+  pathAxes: Float64Array;
+  moveOfPoint: Uint32Array;
+  drawing: { path: Polyline; pathCoarse: Polyline; heat?: Float32Array };
+  radiusMm: number;
+  fiveAxis: boolean;
+}
+
+/** What the 3D view draws of a Coons band plan (arrays transferred from the page). */
+export interface CoonsView extends PathView {
+  drawing: CoonsDrawing;
+}
+
+/** Which STEP faces are selected and which the part's surface covers: 1 or 0 per face (list order). */
+export interface FaceState {
+  selected: Uint8Array;
+  covered: Uint8Array;
+  /** Hide the part's surface (a Coons plan is drawn on the faces). */
+  hideSurface: boolean;
 }
 
 /** What the views draw of a plan (arrays transferred from the page). */
@@ -56,6 +80,10 @@ export type RenderRequest =
   | { type: "part"; part: PartView }
   | { type: "plan"; id: number; plan: PlanView }
   | { type: "flank"; id: number; flank: FlankView }
+  | { type: "coons"; id: number; plan: CoonsView }
+  | { type: "faces"; faces: StepDrawing | null }
+  | { type: "faceState"; state: FaceState }
+  | { type: "facePoint"; id: number; face: number }
   | { type: "cursor"; index: number }
   | { type: "picked"; pole: Vec2 | null }
   | { type: "layers"; layers: Layers }
@@ -69,6 +97,10 @@ export type CursorAt = Partial<Record<"3d" | "flat" | "slit", Vec2>>;
 export type RenderResponse =
   | { type: "cursor"; index: number }
   | { type: "pick"; pane: "flat" | "slit"; x: number; y: number }
+  /** A click on a STEP face in the 3D view (its index in the face list). */
+  | { type: "face"; face: number }
+  /** Where face `face` can be clicked (CSS pixels), or null when hidden from this view. */
+  | { type: "facePoint"; id: number; point: Vec2 | null }
   | { type: "titles"; titles: { pane: "flat" | "slit"; left: number; text: string }[] }
   /**
    * A frame was drawn: its number, the plan in it (the id of its "plan" request, 0 for none), the

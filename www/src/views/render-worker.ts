@@ -67,6 +67,7 @@ function init(request: Extract<RenderRequest, { type: "init" }>): void {
     post({ type: "cursor", index });
   };
   view2d.onPick = (pane, x, y) => post({ type: "pick", pane, x, y });
+  view3d.onFacePick = (face) => post({ type: "face", face });
   view2d.onTitles = (titles) => post({ type: "titles", titles });
   views = { "3d": view3d, "2d": view2d };
 }
@@ -89,6 +90,17 @@ function handle(request: RenderRequest): void {
       views["3d"].setPlan(request.plan);
       views["2d"].setPlan(request.plan);
       return setCursor(0);
+    case "coons":
+      planId = request.id;
+      views["3d"].setPlan(request.plan);
+      views["2d"].clearPlan();
+      return setCursor(0);
+    case "faces":
+      return views["3d"].setFaces(request.faces);
+    case "faceState":
+      return views["3d"].setFaceState(request.state);
+    case "facePoint":
+      return post({ type: "facePoint", id: request.id, point: views["3d"].facePoint(request.face) });
     case "flank":
       planId = request.id;
       cursor = { index: -1, askedAt: frame };

@@ -12,12 +12,14 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { SURFACE } from "../lib/colors";
+import type { StepDrawing } from "../lib/index";
 import { DepthLayer } from "./depth-layer";
 import { drawIn, type Rect } from "./dirty-rects";
 import type { ElementProxy } from "./element-proxy";
 import { dispose, polylineObject } from "./objects";
 import { readPixels } from "./read-pixels";
-import type { FlankView, Layers, PartView, PlanView } from "./render-protocol";
+import { FacesLayer } from "./faces3d";
+import type { FaceState, FlankView, Layers, PartView, PathView } from "./render-protocol";
 
 export class View3d {
   private readonly renderer: THREE.WebGLRenderer;
@@ -46,7 +48,11 @@ export class View3d {
   private layerStale = true;
   /** Where the last frame drew the tool (null: nowhere); undefined: the next frame draws everything. */
   private toolRect: Rect | null | undefined = undefined;
-  private plan: PlanView | null = null;
+  private plan: PathView | null = null;
+  /** A STEP file's faces (kept across parts of the same file), and whether the part's surface is hidden. */
+  private faces: FacesLayer | null = null;
+  private hideSurface = false;
+  private pressedAt: [number, number] | null = null;
   private cursor = -1;
   /** Where the camera looks from when fitting (a unit vector from the part's centre). */
   private fitDirection = DEFAULT_VIEW.clone();
@@ -58,6 +64,8 @@ export class View3d {
 
   /** Hover over the path: the index of the path point under the pointer. */
   onCursor: (index: number) => void = () => {};
+  /** A click on a STEP face (its index in the face list). */
+  onFacePick: (face: number) => void = () => {};
 
   constructor(
     canvas: OffscreenCanvas,
@@ -82,6 +90,15 @@ export class View3d {
     this.toolScene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6), this.toolSun, this.tool);
     element.addEventListener("pointermove", (event) => {
       if ((event as PointerEvent).buttons === 0) this.hover(event as PointerEvent);
+    });
+    // A click that did not orbit (moved under 4 px) picks a face.
+    element.addEventListener("pointerdown", (event) => (this.pressedAt = [(event as PointerEvent).clientX, (event as PointerEvent).clientY]));
+    element.addEventListener("click", (event) => {
+      const { clientX: x, clientY: y } = event as PointerEvent;
+      const moved = this.pressedAt ? Math.hypot(x - this.pressedAt[0], y - this.pressedAt[1]) : 0;
+      if (this.faces === null || moved > 4) return;
+      const face = this.faces.faceAt(this.ndc(x, y), this.camera);
+      if (face !== null) this.onFacePick(face);
     });
   }
 
@@ -120,13 +137,40 @@ export class View3d {
       polygonOffsetUnits: 1,
     });
     this.surface = new THREE.Mesh(geometry, material);
+    this.surface.visible = !this.hideSurface;
     this.content.add(this.surface);
     this.fit();
     this.invalidate(true);
   }
 
-  /** Shows a plan of the current part: heat map, path, needles, tool. */
-  setPlan(plan: PlanView): void {
+  /** Shows a STEP file's faces (null: none, an STL part). */
+  setFaces(faces: StepDrawing | null): void {
+    this.faces?.dispose();
+    this.faces = faces && new FacesLayer(faces);
+    if (this.faces) this.scene.add(this.faces.mesh);
+    this.hideSurface = false;
+    if (this.surface) this.surface.visible = true;
+    this.fit(DEFAULT_VIEW.clone());
+  }
+
+  /** Colours the faces by selection and leaves out those the part's surface draws. */
+  setFaceState(state: FaceState): void {
+    this.faces?.setState(state.selected, state.covered);
+    this.hideSurface = state.hideSurface;
+    if (this.surface) this.surface.visible = !state.hideSurface && this.flank === null;
+    this.invalidate(true);
+  }
+
+  /** Where face `face` can be clicked (CSS pixels), or null. */
+  facePoint(face: number): [number, number] | null {
+    this.camera.updateMatrixWorld();
+    const at = this.faces?.visiblePoint(face, this.camera);
+    if (!at) return null;
+    return [((at.x + 1) / 2) * this.element.clientWidth, ((1 - at.y) / 2) * this.element.clientHeight];
+  }
+
+  /** Shows a plan of the current part (or a Coons band plan on the faces): heat map, path, needles, tool. */
+  setPlan(plan: PathView): void {
     this.dropFlank();
     this.plan = plan;
     dispose(this.path);
@@ -180,7 +224,7 @@ export class View3d {
     if (this.flank === null) return;
     for (const object of [this.flank.surface, this.flank.tips, this.flank.axes, this.flank.envelopes]) dispose(object);
     this.flank = null;
-    if (this.surface) this.surface.visible = true;
+    if (this.surface) this.surface.visible = !this.hideSurface;
   }
 
   setLayers(layers: Layers): void {
@@ -206,10 +250,9 @@ export class View3d {
   /** Frames the whole part, seen from `direction` (kept for the Fit button). */
   fit(direction = this.fitDirection): void {
     this.fitDirection = direction;
-    const geometry = this.surface?.geometry;
-    if (geometry === undefined) return this.invalidate();
-    if (geometry.boundingBox === null) geometry.computeBoundingBox();
-    const sphere = geometry.boundingBox!.getBoundingSphere(new THREE.Sphere());
+    const box = this.box();
+    if (box === null) return this.invalidate();
+    const sphere = box.getBoundingSphere(new THREE.Sphere());
     const distance = (sphere.radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2))) * 1.05;
     this.camera.position.copy(sphere.center).addScaledVector(direction, distance);
     this.camera.near = distance / 100;
@@ -220,6 +263,20 @@ export class View3d {
     this.fitDistance = distance;
     this.placeLevels();
     this.invalidate(true);
+  }
+
+  /** The part's box: the STEP file's faces, else the part's surface. */
+  private box(): THREE.Box3 | null {
+    if (this.faces) return this.faces.box();
+    const geometry = this.surface?.geometry;
+    if (geometry === undefined) return null;
+    if (geometry.boundingBox === null) geometry.computeBoundingBox();
+    return geometry.boundingBox;
+  }
+
+  private ndc(x: number, y: number): THREE.Vector2 {
+    const { clientWidth: w, clientHeight: h } = this.element;
+    return new THREE.Vector2((x / w) * 2 - 1, -(y / h) * 2 + 1);
   }
 
   /** Renders when something changed; the tool tip's place on screen (CSS pixels), if shown. */
@@ -284,8 +341,7 @@ export class View3d {
   private hover(event: PointerEvent): void {
     const plan = this.plan;
     if (this.path === null || this.pathCoarse === null || !this.path.visible || plan === null) return;
-    const { clientWidth: w, clientHeight: h } = this.element;
-    this.raycaster.setFromCamera(new THREE.Vector2((event.clientX / w) * 2 - 1, -(event.clientY / h) * 2 + 1), this.camera);
+    this.raycaster.setFromCamera(this.ndc(event.clientX, event.clientY), this.camera);
     this.raycaster.params.Line = { threshold: plan.radiusMm };
     const hit = this.raycaster.intersectObject(this.pathCoarse)[0];
     if (hit?.index === undefined) return;
@@ -316,7 +372,7 @@ export class View3d {
   }
 
   /** The path at two levels of detail: whole near the part, decimated seen from afar. */
-  private makePath(plan: PlanView): THREE.LOD {
+  private makePath(plan: PathView): THREE.LOD {
     const lod = new THREE.LOD();
     const full = polylineObject(plan.drawing.path);
     this.pathCoarse = polylineObject(plan.drawing.pathCoarse);
@@ -334,7 +390,7 @@ export class View3d {
    */
   private placeLevels(): void {
     const lod = this.path;
-    const centre = this.surface?.geometry.boundingBox?.getCenter(new THREE.Vector3());
+    const centre = this.box()?.getCenter(new THREE.Vector3());
     if (lod === null || centre === undefined) return;
     lod.position.copy(centre);
     for (const level of lod.levels) level.object.position.copy(centre).negate();

@@ -3,9 +3,9 @@
 // panes' titles and where each frame drew the cursor (data-frame and data-cursor on the canvases,
 // which the tests read with the pixels they ask for).
 
-import type { FlankResult, LoadedPart, PlanResult, Vec2 } from "../lib/index";
+import type { CoonsResult, FlankResult, LoadedPart, PlanResult, StepDrawing, Vec2 } from "../lib/index";
 import type { ForwardedEvent } from "./element-proxy";
-import type { FlankView, Layers, PartView, PlanView, RenderRequest, RenderResponse, ViewName } from "./render-protocol";
+import type { CoonsView, FaceState, FlankView, Layers, PartView, PlanView, RenderRequest, RenderResponse, ViewName } from "./render-protocol";
 
 const FORWARDED = ["pointerdown", "pointermove", "pointerup", "pointercancel", "wheel", "contextmenu", "click"] as const;
 
@@ -14,6 +14,7 @@ export class Views {
   private readonly titles = new Map<string, HTMLElement>();
   private nextId = 1;
   private readonly pending = new Map<number, (pixels: { width: number; height: number; data: Uint8Array }) => void>();
+  private readonly facePoints = new Map<number, (point: Vec2 | null) => void>();
   /** Plans sent and not drawn yet: resolved by the first frame that shows them (or a later plan). */
   private readonly drawing = new Map<number, () => void>();
 
@@ -21,6 +22,8 @@ export class Views {
   onCursor: (index: number) => void = () => {};
   /** A click in a 2D pane: a point of its plane (uv, or w of the slit domain). */
   onPick: (pane: "flat" | "slit", x: number, y: number) => void = () => {};
+  /** A click on a STEP face in the 3D view: its index in the face list. */
+  onFacePick: (face: number) => void = () => {};
 
   constructor(private readonly canvases: Record<ViewName, HTMLCanvasElement>) {
     const canvas3d = canvases["3d"].transferControlToOffscreen();
@@ -70,6 +73,36 @@ export class Views {
     const flank: FlankView = { positions, triangles, normals: d.normals, heat: d.heat, axisLines: d.axisLines, axisColours: d.axisColours, tipLines: d.tipLines, tipColours: d.tipColours, envelopeLines: d.envelopeLines, envelopeColours: d.envelopeColours };
     this.send({ type: "flank", id, flank }, buffers(positions, triangles, d.normals, d.heat, d.axisLines, d.axisColours, d.tipLines, d.tipColours, d.envelopeLines, d.envelopeColours));
     return drawn;
+  }
+
+  /** Shows a STEP file's faces (transferred), or none (null). */
+  setFaces(faces: StepDrawing | null): void {
+    const transfer = faces ? buffers(faces.positions, faces.normals, faces.triangles, faces.faceOfVertex, faces.faceOfTriangle) : [];
+    this.send({ type: "faces", faces }, transfer);
+  }
+
+  setFaceState(state: FaceState): void {
+    this.send({ type: "faceState", state });
+  }
+
+  /** Shows a Coons band plan in the 3D view; resolves once a frame shows it (arrays transferred). */
+  setCoons(plan: CoonsResult, radiusMm: number, fiveAxis: boolean): Promise<void> {
+    const id = this.nextId++;
+    const drawn = new Promise<void>((resolve) => this.drawing.set(id, resolve));
+    const { pathContacts, pathTips, pathAxes, drawing: d } = plan;
+    const view: CoonsView = { pathContacts, pathTips, pathAxes, moveOfPoint: d.moveOfPoint, drawing: d, radiusMm, fiveAxis };
+    const polylines = [d.path, d.pathCoarse].flatMap((p) => [p.positions, p.colours, p.segments, p.points]);
+    this.send({ type: "coons", id, plan: view }, buffers(pathContacts, pathTips, pathAxes, d.moveOfPoint, ...polylines));
+    return drawn;
+  }
+
+  /** Where STEP face `face` (list index) can be clicked in the 3D view, CSS pixels (the tests click there). */
+  facePoint(face: number): Promise<Vec2 | null> {
+    const id = this.nextId++;
+    return new Promise((resolve) => {
+      this.facePoints.set(id, resolve);
+      this.send({ type: "facePoint", id, face });
+    });
   }
 
   setCursor(index: number): void {
@@ -131,6 +164,12 @@ export class Views {
         return this.onCursor(message.index);
       case "pick":
         return this.onPick(message.pane, message.x, message.y);
+      case "face":
+        return this.onFacePick(message.face);
+      case "facePoint":
+        this.facePoints.get(message.id)?.(message.point);
+        this.facePoints.delete(message.id);
+        return;
       case "titles":
         for (const { pane, left, text } of message.titles) {
           const title = this.title(pane);

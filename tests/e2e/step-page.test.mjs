@@ -1,0 +1,117 @@
+// End-to-end tests of STEP input on the page (issue 36) in Debian's headless Chromium: the
+// bundled STEP sample (seed 004's blade band) read in the worker, its faces listed and drawn,
+// planned with the Coons band spiral; a face clicked in the 3D view leaves the band (a typed
+// error with the way out) and clicked again closes it; the download is byte-identical to
+// `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on.
+// The tests share one page and run in order.
+import assert from "node:assert/strict";
+import { readFileSync } from "node:fs";
+import { join } from "node:path";
+import { after, before, describe, it } from "node:test";
+import { cli, launch, output, root, screenshotPath, serve, viewStats } from "./harness.mjs";
+
+const PLAN_TIMEOUT = 180_000;
+const SAMPLE = join(root, "www/public/samples/blade_band.step");
+const FACES = [156, 176, 196, 216, 232, 248, 264, 280];
+
+describe("STEP input on the page", { concurrency: false }, () => {
+  let server, browser, page;
+
+  const status = () => page.getByTestId("status").textContent();
+  const settled = async () => {
+    await page.waitForFunction(
+      () => /^(planned|error: |cancelled)/.test(document.querySelector("[data-testid=status]")?.textContent ?? ""),
+      undefined,
+      { timeout: PLAN_TIMEOUT },
+    );
+    return status();
+  };
+  const replan = async (action) => {
+    await page.evaluate(() => (document.querySelector("[data-testid=status]").textContent = "…"));
+    await action();
+    return settled();
+  };
+  const metric = async (id) => (await page.getByTestId(id).textContent()) ?? "";
+  const ticked = () => page.evaluate(() => [...document.querySelectorAll("[data-testid^=face-]")].filter((b) => b.type === "checkbox" && b.checked).map((b) => Number(b.dataset.testid.slice(5))));
+  /** Clicks face `index` (list order) where the 3D view shows it; false when it is hidden from this view. */
+  const clickFace = async (index) => {
+    const at = await page.evaluate((i) => window.slitpathViews.facePoint(i), index);
+    if (at === null) return false;
+    await page.getByTestId("view-3d").click({ position: { x: at[0], y: at[1] } });
+    return true;
+  };
+
+  before(async () => {
+    server = await serve(join(root, "www/dist"));
+    browser = await launch();
+    page = await browser.context.newPage();
+    // 20 000 verifier samples keep the Coons plans quick (the CLI gets the same).
+    await page.goto(`${server.url}?coons-samples=20000`);
+    assert.equal(await settled(), "planned", "the spiral sample plans on opening");
+  });
+
+  after(async () => {
+    await browser?.close();
+    server?.close();
+  });
+
+  it("opens the STEP sample, lists its faces and plans the Coons band", async () => {
+    const state = await replan(() => page.getByTestId("load-step").click());
+    assert.equal(state, "planned", await page.getByTestId("status-detail").textContent());
+    assert.equal(await page.getByTestId("opt-strategy").inputValue(), "coons");
+    assert.deepEqual(await ticked(), FACES, "all eight faces listed and selected");
+    assert.match(await page.getByTestId("face-list").textContent(), /#156b-spline313\.5 mm²/);
+    assert.match(await metric("metric-coons-band"), /^4 × 2 faces/);
+    const max = Number((await metric("metric-coons-scallop")).match(/^([\d.]+) mm/)?.[1]);
+    assert.ok(max > 0 && max <= 0.02, `max scallop ≤ h: ${max}`);
+    const after = Number((await metric("metric-coons-seams")).match(/round the loop max [\d.]+° → ([\d.]+)°/)?.[1]);
+    assert.ok(after < 0.1, `seam jumps round the loop under 0.1° after smoothing: ${after}`);
+    assert.match(await metric("metric-coons-length"), / 0 retractions/);
+    assert.match(page.url(), /[?&]strategy=coons\b/);
+    await page.waitForTimeout(300);
+    const s = await viewStats(page, "view-3d");
+    assert.ok(s.nonBackground > 0.05 && s.colours > 30, `faces and path drawn: ${JSON.stringify(s)}`);
+    await page.screenshot({ path: screenshotPath("step-1-coons.png"), fullPage: true });
+  });
+
+  it("downloads the same program as `slitpath coons`, byte for byte", async () => {
+    const [download] = await Promise.all([page.waitForEvent("download"), page.getByTestId("download-gcode").click()]);
+    assert.equal(download.suggestedFilename(), "blade_band.ngc");
+    const file = join(output, "page-blade_band.ngc");
+    await download.saveAs(file);
+    const command = await page.getByTestId("cli-command").textContent();
+    assert.match(command, /^slitpath coons PART\.step --faces 156,176,196,216,232,248,264,280 /);
+    const cliFile = join(output, "cli-blade_band.ngc");
+    cli("coons", SAMPLE, ...command.split(" ").slice(3), "-o", cliFile);
+    const [fromPage, fromCli] = [readFileSync(file), readFileSync(cliFile)];
+    assert.ok(fromCli.length > 10_000, "the CLI wrote a program");
+    assert.ok(fromPage.equals(fromCli), `page ${fromPage.length} bytes, CLI ${fromCli.length} bytes: they differ`);
+  });
+
+  it("picks faces by clicking them in the 3D view: an open selection is refused, closing it plans again", async () => {
+    const length = await metric("metric-coons-length");
+    let index = 0;
+    while (index < FACES.length && (await page.evaluate((i) => window.slitpathViews.facePoint(i), index)) === null) index++;
+    assert.ok(index < FACES.length, "some face is visible");
+    const refused = await replan(() => clickFace(index));
+    assert.match(refused, /^error: the faces (are not a band of rows|do not close into a band): .*face #\d+/);
+    assert.match(await page.getByTestId("status-detail").textContent(), /closed band of four-sided faces\. The spiral strategy plans the selected faces/);
+    assert.deepEqual(await ticked(), FACES.filter((_, i) => i !== index), "the clicked face is deselected in the list");
+    assert.match(page.url(), new RegExp(`[?&]faces=${FACES.filter((_, i) => i !== index).join("%2C")}`));
+    assert.equal(await metric("metric-coons-length"), length, "the last good plan is still shown");
+    const again = await replan(() => clickFace(index));
+    assert.equal(again, "planned");
+    assert.deepEqual(await ticked(), FACES);
+    assert.equal(await metric("metric-coons-length"), length, "the same band plans the same path");
+  });
+
+  it("shows a typed error for a garbled STEP file and stays usable", async () => {
+    const text = readFileSync(SAMPLE, "utf8").replace("EDGE_CURVE('',#", "EDGE_CURVE('',#999999");
+    const failed = await replan(() => page.getByTestId("stl-input").setInputFiles({ name: "garbled.step", mimeType: "application/step", buffer: Buffer.from(text) }));
+    assert.match(failed, /^error: .*#999999/, "the message names the entity");
+    assert.match(await page.getByTestId("status-detail").textContent(), /garbled\.step was not loaded\. The last good plan is still shown/);
+    assert.equal(await page.getByTestId("download-gcode").isEnabled(), true);
+    const state = await replan(() => page.getByTestId("opt-coons-samples").fill("10000").then(() => page.getByTestId("opt-coons-samples").dispatchEvent("change")));
+    assert.equal(state, "planned", "the page plans again");
+  });
+});
