@@ -2,7 +2,7 @@
 
 use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
-use slitpath::mesh::MeshOptions;
+use slitpath::mesh::{self, MeshOptions};
 use slitpath::origin::OriginChoice;
 use slitpath::plan::{Facets, Optimise, PlanOptions, Planner};
 use slitpath::spiral::{Cut, Direction};
