@@ -208,3 +208,62 @@ fn the_twenty_face_grid_is_one_welded_surface() {
         step::load(fx::field_grid().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
     assert_eq!((out.mesh.report.components, out.mesh.report.boundary_loops, out.mesh.report.closed), (1, 1, false));
 }
+
+/// A cylinder band as Parasolid (Onshape) writes it: two circles bounding the face, no seam
+/// edge (found by trying Onshape exports of the ABC data set). R 10 mm, 5 mm high.
+const SEAMLESS_BAND: &str = "ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION((''),'2;1');
+FILE_NAME('band','',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));
+ENDSEC;
+DATA;
+#1 = ADVANCED_FACE('',(#2,#3),#20,.T.);
+#2 = FACE_OUTER_BOUND('',#4,.T.);
+#3 = FACE_BOUND('',#5,.T.);
+#4 = EDGE_LOOP('',(#6));
+#5 = EDGE_LOOP('',(#7));
+#6 = ORIENTED_EDGE('',*,*,#8,.T.);
+#7 = ORIENTED_EDGE('',*,*,#9,.F.);
+#8 = EDGE_CURVE('',#10,#10,#12,.T.);
+#9 = EDGE_CURVE('',#11,#11,#13,.T.);
+#10 = VERTEX_POINT('',#14);
+#11 = VERTEX_POINT('',#15);
+#12 = CIRCLE('',#16,10.);
+#13 = CIRCLE('',#17,10.);
+#14 = CARTESIAN_POINT('',(10.,0.,0.));
+#15 = CARTESIAN_POINT('',(0.,-10.,5.));
+#16 = AXIS2_PLACEMENT_3D('',#18,#30,#31);
+#17 = AXIS2_PLACEMENT_3D('',#19,#30,#31);
+#18 = CARTESIAN_POINT('',(0.,0.,0.));
+#19 = CARTESIAN_POINT('',(0.,0.,5.));
+#20 = CYLINDRICAL_SURFACE('',#16,10.);
+#30 = DIRECTION('',(0.,0.,1.));
+#31 = DIRECTION('',(1.,0.,0.));
+ENDSEC;
+END-ISO-10303-21;
+";
+
+#[test]
+fn a_cylinder_band_without_a_seam_edge_is_joined_by_a_synthetic_seam() {
+    let o = StepOptions { chordal_tol_mm: 0.01, ..StepOptions::default() };
+    let (_, t) = tess(SEAMLESS_BAND, &o);
+    // The whole band: area 2π·10·5 less the chords' shortfall (< 0.1 %).
+    let area = t.faces[0].area_mm2;
+    let exact = std::f64::consts::TAU * 10.0 * 5.0;
+    assert!((area - exact).abs() < 1e-3 * exact && area < exact, "area {area} vs {exact}");
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.y).length() - 10.0).abs()) < 0.0101);
+    // Welded across the seam: the only boundary edges are the two circles (z = 0 and z = 5).
+    let mut uses = std::collections::BTreeMap::new();
+    for tri in &t.triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    assert!(uses.values().all(|&n| n <= 2));
+    for (&(a, b), _) in uses.iter().filter(|(_, &n)| n == 1) {
+        let (za, zb) = (t.positions[a as usize].z, t.positions[b as usize].z);
+        assert!((za.abs() < 1e-9 && zb.abs() < 1e-9) || ((za - 5.0).abs() < 1e-9 && (zb - 5.0).abs() < 1e-9));
+    }
+}

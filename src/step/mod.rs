@@ -13,7 +13,8 @@
 //!    there on), refused unless it is one open surface.
 //!
 //! Preconditions: faces are ADVANCED_FACEs; a face on a periodic surface has a seam edge where
-//! its loop goes round (as OpenCascade writes it). Invariants of the output: triangles of a face
+//! its loop goes round (as OpenCascade writes it), or is a band bounded by two loops that go
+//! round once in opposite senses (as Parasolid writes it). Invariants of the output: triangles of a face
 //! are wound with the face's normal; vertices on a shared edge are the same vertex in both faces.
 //! Bad input never panics: every fault is a [`StepError`] naming the `#id` at fault.
 

@@ -8,7 +8,9 @@
 //! 2. Each face's loops are chains of these samples; each sample is inverted onto the surface
 //!    (closed form for analytic surfaces, Newton for B-splines). Angle parameters are unwrapped
 //!    along the loop, so a seam edge used twice gives the two sides of the parameter rectangle;
-//!    a loop that winds once round a periodic surface cannot be a planar domain and is refused.
+//!    two loops that wind once round a periodic surface in opposite senses (a band without a
+//!    seam edge, as Parasolid writes it) are joined by a synthetic seam, sampled once and used
+//!    by both its sides; other winding loops cannot be a planar domain and are refused.
 //! 3. [`triangulate`] meshes the domain to the tolerance; triangles are wound so their normal
 //!    is the face's (the surface normal, reversed when the face's `same_sense` is false).
 
@@ -111,7 +113,7 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
     let mut chordal = 0.0f64;
     let budget = o.max_triangles;
     for f in &faces {
-        let (tris, local_to_global, dom, err) = mesh_face(f, &edge_samples, &positions, tol, max_edge, budget)?;
+        let (tris, local_to_global, dom, err) = mesh_face(f, &edge_samples, &mut positions, tol, max_edge, budget)?;
         chordal = chordal.max(err);
         let mut global: Vec<u32> = local_to_global;
         for p in &dom.p[global.len()..] {
@@ -196,7 +198,7 @@ type FaceMesh = (Vec<[u32; 3]>, Vec<u32>, Domain, f64);
 fn mesh_face(
     f: &Face,
     edge_samples: &BTreeMap<u64, Vec<u32>>,
-    positions: &[DVec3],
+    positions: &mut Vec<DVec3>,
     tol: f64,
     max_edge: f64,
     budget: usize,
@@ -206,6 +208,7 @@ fn mesh_face(
     let mut global: Vec<u32> = Vec::new();
     let mut uv: Vec<DVec2> = Vec::new();
     let mut loops: Vec<(bool, Vec<u32>)> = Vec::new();
+    let mut winding: Vec<(u64, [i64; 2])> = Vec::new();
     for b in &f.bounds {
         // The chain of global sample ids round the loop, each once.
         let mut chain: Vec<u32> = Vec::new();
@@ -246,16 +249,49 @@ fn mesh_face(
             uv.push(w);
             global.push(g);
         }
-        let closing = uv[start] - uv[uv.len() - 1];
+        // Turns round each periodic direction from the first sample back to itself.
+        let (first, last) = (uv[start], uv[uv.len() - 1]);
+        let mut turns = [0i64; 2];
         for d in 0..2 {
-            if periodic[d] && (closing[d] - num::wrap_pi(closing[d])).abs() > 1.0 {
-                return Err(StepError::Entity {
-                    id: b.id,
-                    message: format!("the loop winds round the {} (a face bounded by two such loops, without a seam edge, is not supported)", s.kind()),
-                });
+            if periodic[d] {
+                turns[d] = ((last[d] - first[d] + num::wrap_pi(first[d] - last[d])) / TAU).round() as i64;
             }
         }
         loops.push((b.outer, (start as u32..uv.len() as u32).collect()));
+        winding.push((b.id, turns));
+    }
+    // Loops that wind round the surface (Parasolid writes a cylinder band as two circles and no
+    // seam): exactly two, once each in opposite senses round the same direction, are joined by a
+    // synthetic seam into one outer loop; anything else is refused.
+    let wound: Vec<usize> = (0..loops.len()).filter(|&k| winding[k].1 != [0, 0]).collect();
+    if !wound.is_empty() {
+        let (ka, kb) = (wound[0], *wound.last().unwrap_or(&wound[0]));
+        let (ta, tb) = (winding[ka].1, winding[kb].1);
+        let d = if ta[0] != 0 { 0 } else { 1 };
+        if wound.len() != 2 || ta[1 - d] != 0 || tb[1 - d] != 0 || ta[d].abs() != 1 || tb[d] != -ta[d] {
+            return Err(StepError::Entity {
+                id: winding[ka].0,
+                message: format!(
+                    "the loop winds round the {} (only a band bounded by two loops winding once in opposite senses is supported)",
+                    s.kind()
+                ),
+            });
+        }
+        let joined = join_wound_loops(
+            s,
+            &loops[ka].1,
+            &loops[kb].1,
+            d,
+            ta[d] as f64,
+            &mut uv,
+            &mut global,
+            positions,
+            tol,
+            max_edge,
+        );
+        let mut rest: Vec<(bool, Vec<u32>)> = vec![(true, joined)];
+        rest.extend(loops.iter().enumerate().filter(|(k, _)| *k != ka && *k != kb).map(|(_, l)| (false, l.1.clone())));
+        loops = rest;
     }
     // Scale the parameters to about millimetres (mean speeds over the domain's box).
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
@@ -331,4 +367,89 @@ fn mesh_face(
     };
     let err = triangulate::refine(&mut dom, &mut tris, tol, max_edge, budget, &eval).map_err(fail)?;
     Ok((tris, global, dom, err))
+}
+
+/// Joins loop `a` and loop `b`, which wind round direction `d` of the surface `wa` (±1) and
+/// −`wa` turns, into one polygon: `a`, a seam from `a`'s first sample to the sample of `b`
+/// nearest it in `d`, `b` re-unwrapped from there, and the seam back. The seam's samples are
+/// new positions used by both of its sides (so the mesh stays welded); its two copies of each
+/// sample lie a turn apart in the parameters. Returns the polygon's local indices.
+#[allow(clippy::too_many_arguments)]
+fn join_wound_loops(
+    s: &super::geom::Surface,
+    a: &[u32],
+    b: &[u32],
+    d: usize,
+    wa: f64,
+    uv: &mut Vec<DVec2>,
+    global: &mut Vec<u32>,
+    positions: &mut Vec<DVec3>,
+    tol: f64,
+    max_edge: f64,
+) -> Vec<u32> {
+    let a0 = a[0] as usize;
+    let ua = uv[a0][d];
+    let k = (0..b.len())
+        .min_by(|&i, &j| {
+            num::wrap_pi(uv[b[i] as usize][d] - ua).abs().total_cmp(&num::wrap_pi(uv[b[j] as usize][d] - ua).abs())
+        })
+        .unwrap_or(0);
+    // `b` from its sample k, unwrapped to start a turn (`wa`) from `a`'s first sample.
+    let order: Vec<u32> = (0..b.len()).map(|i| b[(k + i) % b.len()]).collect();
+    let mut prev = uv[order[0] as usize];
+    prev[d] = ua + wa * TAU + num::wrap_pi(prev[d] - ua);
+    let mut b_uv = vec![prev];
+    for &i in &order[1..] {
+        let mut w = uv[i as usize];
+        w[d] = prev[d] + num::wrap_pi(w[d] - prev[d]);
+        b_uv.push(w);
+        prev = w;
+    }
+    for (&i, w) in order.iter().zip(&b_uv) {
+        uv[i as usize] = *w;
+    }
+    // The seam: a straight segment in the parameters from a0 (a turn on) to b's start.
+    let (mut from, to) = (uv[a0], b_uv[0]);
+    from[d] += wa * TAU;
+    let at = |t: f64| s.eval(from.lerp(to, t)).0;
+    let mut n = 1usize;
+    loop {
+        let ok = (0..n).all(|i| {
+            let (t0, t1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+            let (p0, p1, pm) = (at(t0), at(t1), at(0.5 * (t0 + t1)));
+            (p1 - p0).length() <= max_edge && (pm - 0.5 * (p0 + p1)).length() <= 0.5 * tol
+        });
+        if ok || n >= 1 << 12 {
+            break;
+        }
+        n *= 2;
+    }
+    let seam: Vec<(DVec2, u32)> = (1..n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            positions.push(at(t));
+            (from.lerp(to, t), positions.len() as u32 - 1)
+        })
+        .collect();
+    let (ga0, gb0) = (global[a0], global[order[0] as usize]);
+    let mut push = |w: DVec2, g: u32| -> u32 {
+        uv.push(w);
+        global.push(g);
+        uv.len() as u32 - 1
+    };
+    let mut poly: Vec<u32> = a.to_vec();
+    poly.push(push(from, ga0));
+    for &(w, g) in &seam {
+        poly.push(push(w, g));
+    }
+    poly.extend(&order);
+    let mut b_end = b_uv[0];
+    b_end[d] -= wa * TAU;
+    poly.push(push(b_end, gb0));
+    for &(w, g) in seam.iter().rev() {
+        let mut w = w;
+        w[d] -= wa * TAU;
+        poly.push(push(w, g));
+    }
+    poly
 }
