@@ -372,12 +372,15 @@ impl Symbolic {
             let rows = cols + pat.len();
             below.clear();
             below.extend(pat.iter().map(|&r| y[r as usize]));
+            // Slices zipped rather than indexed: the same operations in the same order, without
+            // a bounds check per entry (which the wasm engine does not hoist out of the loop).
+            let diag = &mut y[b..b + cols];
             for j in 0..cols {
                 let col = &blk[j * rows..(j + 1) * rows];
-                let yj = y[b + j] / col[j];
-                y[b + j] = yj;
-                for i in j + 1..cols {
-                    y[b + i] -= col[i] * yj;
+                let yj = diag[j] / col[j];
+                diag[j] = yj;
+                for (yi, &c) in diag[j + 1..].iter_mut().zip(&col[j + 1..cols]) {
+                    *yi -= c * yj;
                 }
                 for (x, &c) in below.iter_mut().zip(&col[cols..]) {
                     *x -= c * yj;
@@ -392,16 +395,17 @@ impl Symbolic {
             let rows = cols + pat.len();
             below.clear();
             below.extend(pat.iter().map(|&r| y[r as usize]));
+            let diag = &mut y[b..b + cols];
             for j in (0..cols).rev() {
                 let col = &blk[j * rows..(j + 1) * rows];
-                let mut sum = y[b + j];
-                for i in j + 1..cols {
-                    sum -= col[i] * y[b + i];
+                let mut sum = diag[j];
+                for (&c, &yi) in col[j + 1..cols].iter().zip(&diag[j + 1..]) {
+                    sum -= c * yi;
                 }
                 for (&c, &x) in col[cols..].iter().zip(&below) {
                     sum -= c * x;
                 }
-                y[b + j] = sum / col[j];
+                diag[j] = sum / col[j];
             }
         }
     }

@@ -64,17 +64,28 @@ pub(super) fn write(toolpath: &Toolpath, options: &GcodeOptions) -> Result<Strin
     if let Some(l) = modal.line(true, &[('Z', f.num(first.z))], None) {
         line(&l);
     }
+    // One buffer per word and one for the feed, reused move after move.
+    let letters: &[char] = if angles.is_some() { &['X', 'Y', 'Z', 'A', 'C'] } else { &['X', 'Y', 'Z'] };
+    let mut words: Vec<(char, String)> = letters.iter().map(|&c| (c, String::new())).collect();
+    let mut feed = String::new();
+    let mut moved = String::new();
     for (i, m) in toolpath.moves.iter().enumerate() {
-        let mut words = vec![('X', f.num(m.tip.x)), ('Y', f.num(m.tip.y)), ('Z', f.num(m.tip.z))];
+        let mut values = [m.tip.x, m.tip.y, m.tip.z, 0.0, 0.0];
         if let Some(angles) = &angles {
-            let (a, c) = angles[i];
-            words.push(('A', f.num(a)));
-            words.push(('C', f.num(c)));
+            (values[3], values[4]) = angles[i];
+        }
+        for ((_, word), &v) in words.iter_mut().zip(&values) {
+            word.clear();
+            f.push_num(word, v);
         }
         let rapid = m.kind.is_rapid();
-        let feed = (!rapid).then(|| f.with(m.feed_mm_min, 1));
-        if let Some(l) = modal.line(rapid, &words, feed) {
-            line(&l);
+        feed.clear();
+        if !rapid {
+            f.push_with(&mut feed, m.feed_mm_min, 1);
+        }
+        moved.clear();
+        if modal.write(&mut moved, rapid, &words, (!rapid).then_some(feed.as_str())) {
+            line(&moved);
         }
     }
     line("M5");
@@ -94,18 +105,26 @@ impl Modal {
     /// The line for a move to `words`, or None when no coordinate changes at the output
     /// precision (then nothing is written and the state is unchanged).
     fn line(&mut self, rapid: bool, words: &[(char, String)], feed: Option<String>) -> Option<String> {
-        let changed: Vec<&(char, String)> =
-            words.iter().filter(|w| !self.words.iter().any(|(c, v)| *c == w.0 && *v == w.1)).collect();
-        if changed.is_empty() {
-            return None;
-        }
         let mut s = String::new();
+        self.write(&mut s, rapid, words, feed.as_deref()).then_some(s)
+    }
+
+    /// [`Modal::line`] appended to `s`; false when nothing is written.
+    fn write(&mut self, s: &mut String, rapid: bool, words: &[(char, String)], feed: Option<&str>) -> bool {
+        let unchanged = |w: &(char, String)| self.words.iter().any(|(c, v)| *c == w.0 && *v == w.1);
+        if words.iter().all(unchanged) {
+            return false;
+        }
+        let start = s.len();
         if self.rapid != Some(rapid) {
             s.push_str(if rapid { "G0" } else { "G1" });
             self.rapid = Some(rapid);
         }
-        for (c, v) in changed {
-            if !s.is_empty() {
+        for (c, v) in words {
+            if self.words.iter().any(|(k, x)| k == c && x == v) {
+                continue;
+            }
+            if s.len() > start {
                 s.push(' ');
             }
             s.push(*c);
@@ -116,12 +135,12 @@ impl Modal {
             }
         }
         if let Some(feed) = feed {
-            if self.feed.as_ref() != Some(&feed) {
+            if self.feed.as_deref() != Some(feed) {
                 s.push_str(" F");
-                s.push_str(&feed);
-                self.feed = Some(feed);
+                s.push_str(feed);
+                self.feed = Some(feed.to_string());
             }
         }
-        Some(s)
+        true
     }
 }

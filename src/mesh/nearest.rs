@@ -10,6 +10,7 @@
 //! builds the same tree, and ties between faces at equal distance go to the lower face index.
 
 use crate::bvh::{self, Node};
+use crate::num;
 use glam::DVec3;
 
 /// Steps of [`FaceTree::clear_ball`] before a ball is reported unresolved.
@@ -150,7 +151,7 @@ impl FaceTree {
                 let (n, offset) = self.planes[slot];
                 let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
                 // Both ends on one side of the plane and beyond the limit: the face too.
-                if (da * db > 0.0 && da.abs().min(db.abs()) >= limit) || self.sphere_beyond(slot, a, b, limit) {
+                if (da * db > 0.0 && num::min(da.abs(), db.abs()) >= limit) || self.sphere_beyond(slot, a, b, limit) {
                     continue;
                 }
                 let [p, q, r] = self.corners[slot];
@@ -361,9 +362,9 @@ pub fn segment_triangle_distance2(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVe
         let bary = closest_on_triangle(x, a, b, c);
         (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(x)
     };
-    let mut d = to_triangle(p).min(to_triangle(q));
+    let mut d = num::min(to_triangle(p), to_triangle(q));
     for (e0, e1) in [(a, b), (b, c), (c, a)] {
-        d = d.min(segment_segment_distance2(p, q, e0, e1));
+        d = num::min(d, segment_segment_distance2(p, q, e0, e1));
     }
     d
 }

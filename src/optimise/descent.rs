@@ -7,8 +7,8 @@
 //!   sigmoid of eq. 32 mapping the gradient into those intervals (C = 0.9 moves the most
 //!   constrained unknown 2C − 1 = 80 % of its interval).
 //! * [`Step::Newton`], ours: the Gauss–Newton matrix of E (E_w's along and across ∇T, the strip
-//!   barrier's and α·E_g's, [`EnergyModel::gauss_newton`] and
-//!   [`EnergyModel::smoothness_gauss_newton`], on the same unknowns; analysed once, refactorised
+//!   barrier's and α·E_g's, [`EnergyModel::gauss_newton_at`] and
+//!   [`EnergyModel::smoothness_gauss_newton_at`], on the same unknowns; analysed once, refactorised
 //!   numerically each iteration) solved for the direction, then the full step. A raw gradient
 //!   step moves one ring of vertices per iteration while the field needs moves across the
 //!   whole part: the paper reports 298 s for one surface.
@@ -17,7 +17,7 @@
 //! moving alone; simultaneous moves of neighbours can still invert a face) and E does not
 //! rise (Armijo, 1e-4).
 
-use super::energy::{EnergyModel, EnergyParts};
+use super::energy::{EnergyModel, EnergyParts, Evaluated};
 use super::field::Field;
 use super::{OptimiseError, OptimiseOptions, Step, Stop};
 use crate::linalg::{mesh_order, restrict_order, LinalgError, SparseCholesky};
@@ -48,7 +48,9 @@ pub(super) fn descend(
     let mut x = x;
     let mut r = field.radii(&x);
     let mut grad_v = vec![0.0; r.len()];
-    let mut energy = model.evaluate(&r, Some(&mut grad_v));
+    // The current field's intermediate values: its gradient and Gauss–Newton matrices read them.
+    let (mut energy, mut at) = model.evaluate_at(&r);
+    model.gradient_at(&at, &mut grad_v);
     if !energy.total.is_finite() {
         return Err(OptimiseError::NotFinite);
     }
@@ -61,7 +63,7 @@ pub(super) fn descend(
     while iterations < options.max_iterations {
         let g = field.gather(&grad_v);
         let direction = match options.step {
-            Step::Newton => newton_direction(model, field, &r, &g, &mut system)?,
+            Step::Newton => newton_direction(model, field, &r, &at, &g, &mut system)?,
             Step::Sigmoid { c } => sigmoid_move(field, &r, &x, &g, c),
         };
         let slope: f64 = g.iter().zip(&direction).map(|(a, b)| a * b).sum();
@@ -75,9 +77,9 @@ pub(super) fn descend(
             let trial: Vec<f64> = x.iter().zip(&direction).map(|(a, d)| a + t * d).collect();
             let tr = field.radii(&trial);
             if field.valid(&tr) {
-                let e = model.evaluate(&tr, None);
+                let (e, trial_at) = model.evaluate_at(&tr);
                 if e.total <= energy.total + 1e-4 * t * slope {
-                    break Some((trial, tr, e));
+                    break Some((trial, tr, e, trial_at));
                 }
             }
             halvings += 1;
@@ -86,7 +88,7 @@ pub(super) fn descend(
                 break None;
             }
         };
-        let Some((trial, tr, trial_energy)) = accepted else {
+        let Some((trial, tr, trial_energy, trial_at)) = accepted else {
             stop = Stop::NoDescent;
             break;
         };
@@ -96,7 +98,8 @@ pub(super) fn descend(
         let drop = energy.total - trial_energy.total;
         x = trial;
         r = tr;
-        energy = model.evaluate(&r, Some(&mut grad_v));
+        (energy, at) = (trial_energy, trial_at);
+        model.gradient_at(&at, &mut grad_v);
         on_step(&r, &energy);
         if drop <= options.tolerance_rel * energy.total {
             stop = Stop::Converged;
@@ -113,7 +116,7 @@ struct NewtonSystem {
     /// Per entry of the faces' 3×3 blocks (row-major), its lower slot, or [`NONE`] for the
     /// upper triangle and fixed vertices (the lower mirror carries the value).
     block_slots: Vec<u32>,
-    /// Per value of [`EnergyModel::smoothness_gauss_newton`], likewise.
+    /// Per value of [`EnergyModel::smoothness_gauss_newton_at`], likewise.
     smooth_slots: Vec<u32>,
     /// The diagonals of the unknowns no face touches (vertices of the skipped pole face only):
     /// a unit there makes their direction −g = 0.
@@ -225,15 +228,17 @@ const SHIFTS: usize = 6;
 
 type Blocks = Vec<([u32; 3], [[f64; 3]; 3])>;
 
-/// The Gauss–Newton direction −K⁻¹ g on the unknowns (the system made on the first call).
+/// The Gauss–Newton direction −K⁻¹ g on the unknowns at the field `r` (evaluated as `at`; the
+/// system made on the first call).
 fn newton_direction(
     model: &EnergyModel,
     field: &Field,
     r: &[f64],
+    at: &Evaluated,
     g: &[f64],
     system: &mut Option<NewtonSystem>,
 ) -> Result<Vec<f64>, OptimiseError> {
-    let (blocks, smooth) = crate::par::join(|| model.gauss_newton(r), || model.smoothness_gauss_newton(r));
+    let (blocks, smooth) = crate::par::join(|| model.gauss_newton_at(at), || model.smoothness_gauss_newton_at(at));
     match system {
         Some(sys) => sys.refactor(&blocks, &smooth)?,
         None => *system = Some(NewtonSystem::new(model, field, r, &blocks, &smooth)?),

@@ -134,6 +134,16 @@ impl Levels {
     }
 }
 
+/// E's intermediate values at one field (per-face states, level scales, divergences): what the
+/// gradient and the Gauss–Newton matrices read, kept so that a field the line search accepted is
+/// not evaluated again for them (the descent took the face states six times per iteration).
+#[derive(Debug, Clone)]
+pub(super) struct Evaluated {
+    states: Vec<FaceState>,
+    levels: Levels,
+    div: Vec<f64>,
+}
+
 /// The per-face data of the energy on one surface, for many fields.
 #[derive(Debug, Clone)]
 pub(super) struct EnergyModel {
@@ -150,7 +160,7 @@ pub(super) struct EnergyModel {
     excluded: usize,
     /// E_g's stars: per vertex in E_g, its star's vertices (sorted) and, per face round it, the
     /// face (index into `faces`), the corner that is the vertex, and where the face's corners
-    /// are in the star (see [`EnergyModel::smoothness_gauss_newton`]).
+    /// are in the star (see [`EnergyModel::smoothness_gauss_newton_at`]).
     stars: Vec<Star>,
 }
 
@@ -244,7 +254,7 @@ impl EnergyModel {
     }
 
     /// Whether E_g couples the stars of vertices (α > 0), which the Gauss–Newton matrix then
-    /// carries ([`EnergyModel::smoothness_gauss_newton`]).
+    /// carries ([`EnergyModel::smoothness_gauss_newton_at`]).
     pub fn couples_stars(&self) -> bool {
         self.alpha > 0.0
     }
@@ -328,8 +338,21 @@ impl EnergyModel {
         lv
     }
 
-    /// E at `r`; with `gradient`, also ∂E/∂r_i per vertex (overwritten).
+    /// E at `r`; with `gradient`, also ∂E/∂r_i per vertex (overwritten). The descent keeps what
+    /// [`EnergyModel::evaluate_at`] returns instead.
+    #[cfg(test)]
     pub fn evaluate(&self, r: &[f64], gradient: Option<&mut [f64]>) -> EnergyParts {
+        let (parts, at) = self.evaluate_at(r);
+        if let Some(out) = gradient {
+            self.gradient_at(&at, out);
+        }
+        parts
+    }
+
+    /// E at `r` and the intermediate values the gradient and the Gauss–Newton matrices of this
+    /// field are computed from ([`EnergyModel::gradient_at`], [`EnergyModel::gauss_newton_at`],
+    /// [`EnergyModel::smoothness_gauss_newton_at`]).
+    pub(super) fn evaluate_at(&self, r: &[f64]) -> (EnergyParts, Evaluated) {
         let states = self.states(r);
         let levels = self.levels(&states);
         let mut parts = EnergyParts { e_w: levels.energy(), ..EnergyParts::default() };
@@ -349,10 +372,12 @@ impl EnergyModel {
             }
         }
         parts.total = parts.e_w + self.alpha * (parts.e_n + parts.e_g) + parts.e_b;
-        if let Some(out) = gradient {
-            self.gradient(&states, &levels, &div, out);
-        }
-        parts
+        (parts, Evaluated { states, levels, div })
+    }
+
+    /// ∂E/∂r_i per vertex (overwritten) at the field `at` was evaluated at.
+    pub(super) fn gradient_at(&self, at: &Evaluated, out: &mut [f64]) {
+        self.gradient(&at.states, &at.levels, &at.div, out);
     }
 
     /// D_j per vertex (0 where the vertex is not in E_g).
@@ -420,12 +445,12 @@ impl EnergyModel {
     /// scales, its across part floored at [`ACROSS_FLOOR`] times the along part (where the field
     /// is sparse the true Hessian is negative across ∇T), plus the barrier's convex part
     /// μA ttᵀ/(t·G)².
-    pub(super) fn gauss_newton(&self, r: &[f64]) -> Vec<([u32; 3], [[f64; 3]; 3])> {
-        let states = self.states(r);
-        let lv = self.levels(&states);
+    /// At the field `at` was evaluated at.
+    pub(super) fn gauss_newton_at(&self, at: &Evaluated) -> Vec<([u32; 3], [[f64; 3]; 3])> {
+        let lv = &at.levels;
         self.faces
             .iter()
-            .zip(&states)
+            .zip(&at.states)
             .map(|(face, st)| {
                 let (g, c) = (st.g, st.c);
                 let (mut da, mut db) = (0.0, 0.0);
@@ -458,7 +483,7 @@ impl EnergyModel {
             .collect()
     }
 
-    /// The pattern of [`EnergyModel::smoothness_gauss_newton`]'s values: (vertex, vertex) pairs,
+    /// The pattern of [`EnergyModel::smoothness_gauss_newton_at`]'s values: (vertex, vertex) pairs,
     /// the same every time.
     pub(super) fn smoothness_pattern(&self) -> Vec<(u32, u32)> {
         let mut out = Vec::new();
@@ -477,13 +502,15 @@ impl EnergyModel {
     /// Σ_F −A_F ∇φ_jᵀ (I − XXᵀ)/|∇T| ∇φ over the faces round j. Each vertex couples its whole star
     /// (E_g is a fourth-order term): left to the line search, it made the Gauss–Newton steps of
     /// E_w wrinkle the level sets, and every step was cut to a sixteenth.
-    pub(super) fn smoothness_gauss_newton(&self, r: &[f64]) -> Vec<f64> {
+    /// At the field `at` was evaluated at.
+    pub(super) fn smoothness_gauss_newton_at(&self, at: &Evaluated) -> Vec<f64> {
+        let at_states = &at.states;
         let per_star = crate::par::each(self.stars.len(), |i| {
             let star = &self.stars[i];
             let mut d = vec![0.0; star.members.len()];
             for &(f, k, at) in &star.faces {
                 let face = &self.faces[f as usize];
-                let st = self.state(face, r);
+                let st = at_states[f as usize];
                 let len = st.g.sqrt();
                 let x = st.gvec / len;
                 // ∂D_j/∂r_m = −A ∇φ_kᵀ (I − XXᵀ) ∇φ_m / |G|.

@@ -3,6 +3,7 @@
 
 use super::{OriginError, OriginOptions};
 use crate::mesh::{FaceCurvature, Surface};
+use crate::num;
 use crate::slitmap::{Mode, SlitMap, SlitMapSolver};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
@@ -129,6 +130,7 @@ impl<'a> EnergyEvaluator<'a> {
         let mut gouge_area = 0.0;
         let mut gouge_faces = 0;
         let mut area = 0.0;
+        let radius = radii(map);
         for &(f, grad, a) in &self.faces {
             let Some((alpha, beta)) = self.face_terms(map, f, &grad)? else {
                 gouge_area += a;
@@ -137,7 +139,7 @@ impl<'a> EnergyEvaluator<'a> {
             };
             area += a;
             let (aa, ab) = (a * alpha, a * beta);
-            self.split(map, f, r_min, width, |j, w| {
+            self.split(&radius, f, r_min, width, |j, w| {
                 acc[j][0] += w * aa;
                 acc[j][1] += w * ab;
             });
@@ -186,9 +188,10 @@ impl<'a> EnergyEvaluator<'a> {
         }
         let (r_min, width) = self.bin_frame(map.mode);
         let mut e = 0.0;
+        let radius = radii(map);
         for &(f, grad, a) in &self.faces {
             if let Some((alpha, beta)) = self.face_terms(map, f, &grad)? {
-                self.split(map, f, r_min, width, |j, w| {
+                self.split(&radius, f, r_min, width, |j, w| {
                     let s2 = slopes[j] * slopes[j];
                     e += w * a * (alpha / s2 + beta * s2);
                 });
@@ -246,15 +249,16 @@ impl<'a> EnergyEvaluator<'a> {
     }
 
     /// Calls `add(bin, weight)` for the bins the radius range of face `f` overlaps, the weights
-    /// proportional to the overlap (summing to 1), so E_min is continuous in the pole.
-    fn split(&self, map: &SlitMap, f: u32, r_min: f64, width: f64, mut add: impl FnMut(usize, f64)) {
+    /// proportional to the overlap (summing to 1), so E_min is continuous in the pole. `radius`
+    /// is |w| per vertex ([`radii`]).
+    fn split(&self, radius: &[f64], f: u32, r_min: f64, width: f64, mut add: impl FnMut(usize, f64)) {
         let t = self.triangles[f as usize];
-        let r = t.map(|v| map.w[v as usize].length());
+        let r = t.map(|v| radius[v as usize]);
         // In bin units, clamped to [0, bins] (|w| may overshoot 1 by the P1 error).
         let top = self.bins as f64;
         let x = |r: f64| ((r - r_min) / width).clamp(0.0, top);
-        let lo = x(r[0].min(r[1]).min(r[2]));
-        let hi = x(r[0].max(r[1]).max(r[2]));
+        let lo = x(num::min(num::min(r[0], r[1]), r[2]));
+        let hi = x(num::max(num::max(r[0], r[1]), r[2]));
         let last = self.bins - 1;
         // lo and hi are in [0, bins]: truncation is their floor, without a libm call.
         let j0 = (lo as usize).min(last);
@@ -265,12 +269,17 @@ impl<'a> EnergyEvaluator<'a> {
         let j1 = (hi as usize).min(last);
         let span = hi - lo;
         for j in j0..=j1 {
-            let overlap = hi.min((j + 1) as f64) - lo.max(j as f64);
+            let overlap = num::min(hi, (j + 1) as f64) - num::max(lo, j as f64);
             if overlap > 0.0 {
                 add(j, overlap / span);
             }
         }
     }
+}
+
+/// |w| per vertex of `map`: each is needed by every face round the vertex.
+fn radii(map: &SlitMap) -> Vec<f64> {
+    map.w.iter().map(|w| w.length()).collect()
 }
 
 #[cfg(test)]
@@ -314,10 +323,11 @@ mod tests {
         let options = OriginOptions { bins: 5, ..Default::default() };
         let ev = EnergyEvaluator::new(&surface, &solver, &options).unwrap();
         let map = solver.map(DVec2::new(0.1, -0.2)).unwrap();
+        let radius = radii(&map);
         for &(f, _, _) in &ev.faces {
             let mut total = 0.0;
             let mut seen = Vec::new();
-            ev.split(&map, f, 0.0, 0.2, |j, w| {
+            ev.split(&radius, f, 0.0, 0.2, |j, w| {
                 assert!(w > 0.0 && w <= 1.0);
                 total += w;
                 seen.push(j);

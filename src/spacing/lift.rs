@@ -131,7 +131,7 @@ impl<'a> Lift<'a> {
                 // Unwrap the query into the face's frame.
                 let qx = x + TAU * ((c[0].x - x) / TAU).round();
                 let bary = barycentric(c[0], c[1], c[2], DVec2::new(qx, rho));
-                let m = bary[0].min(bary[1]).min(bary[2]);
+                let m = num::min(num::min(bary[0], bary[1]), bary[2]);
                 (if m.is_finite() { m } else { f64::NEG_INFINITY }, bary)
             };
             if let Some((f, bary)) = self.edge_walk(near as usize, &score) {
@@ -358,7 +358,7 @@ impl PoleStar {
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for &(f, c) in &self.faces {
             let b = barycentric(c[0], c[1], c[2], q);
-            let m = b[0].min(b[1]).min(b[2]);
+            let m = num::min(num::min(b[0], b[1]), b[2]);
             if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
                 best = Some((m, f, b));
             }
@@ -514,7 +514,7 @@ impl StripIndex {
                 continue; // cannot beat a face that contains q: skip the divisions
             }
             let bary = barycentric(t[0], t[1], t[2], q);
-            let m = bary[0].min(bary[1]).min(bary[2]);
+            let m = num::min(num::min(bary[0], bary[1]), bary[2]);
             if m.is_finite() && best.map_or(true, |(bm, _, _)| m > bm) {
                 *best = Some((m, f as usize, bary));
             }

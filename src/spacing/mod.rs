@@ -61,6 +61,7 @@ pub use lift::{Lift, Lifted};
 
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
+use crate::num;
 use crate::slitmap::{Mode, SlitMap};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
@@ -1080,7 +1081,7 @@ impl<'a> Spacer<'a> {
         const N: usize = 16;
         for k in 1..N {
             let q = self.q(lo + (hi - lo) * k as f64 / N as f64, theta)?;
-            if upper.distance(q).min(lower.distance(q)) > self.ball {
+            if num::min(upper.distance(q), lower.distance(q)) > self.ball {
                 return Ok(false);
             }
         }
@@ -1107,7 +1108,7 @@ impl<'a> Spacer<'a> {
         let (mut b, mut gb) = (hi, du_b - dl_b);
         if ga <= 0.0 || gb >= 0.0 {
             // Not the usual picture (strongly curved meridian): fall back to the safe answer.
-            return Ok(du_a.min(dl_a) <= r && du_b.min(dl_b) <= r);
+            return Ok(num::min(du_a, dl_a) <= r && num::min(du_b, dl_b) <= r);
         }
         let mut worst = f64::NEG_INFINITY;
         let mut side = 0i8;
@@ -1115,7 +1116,7 @@ impl<'a> Spacer<'a> {
             let s = (a * gb - b * ga) / (gb - ga);
             let q = self.q(s, theta)?;
             let (du, dl) = (upper.distance(q), lower.distance(q));
-            worst = worst.max(du.min(dl));
+            worst = num::max(worst, num::min(du, dl));
             if worst > r {
                 return Ok(false);
             }
@@ -1179,11 +1180,11 @@ impl Chain {
         let (h, a, t) = if k < 2 { (0, c[0], k as f64 + s) } else { (1, c[2], (k - 2) as f64 + s) };
         let (u, v, sharp) = self.halves[h];
         let smooth = parabola_dist2(a - q, u, v, t);
-        let d2 = if sharp { smooth.max(poly) } else { smooth };
+        let d2 = if sharp { num::max(smooth, poly) } else { smooth };
         // The centres themselves are on the curve: never farther than the nearest of them (a
         // chain folding back on itself made the parabola of the wrong half the estimate, and no
         // radius passed on face_holes, beetle and four more shared meshes).
-        c.iter().map(|x| x.distance_squared(q)).fold(d2, f64::min).sqrt()
+        c.iter().map(|x| x.distance_squared(q)).fold(d2, num::min).sqrt()
     }
 }
 
@@ -1202,7 +1203,7 @@ fn parabola_dist2(d: DVec3, u: DVec3, v: DVec3, mut t: f64) -> f64 {
             break;
         }
         t = (t - g / gg).clamp(0.0, 2.0);
-        best = best.min(f(t));
+        best = num::min(best, f(t));
     }
     best
 }

@@ -2,6 +2,7 @@
 //! consecutive ball centres, and the two exact queries the verifier needs (distance of a point,
 //! first entry of a ray).
 
+use crate::num;
 use glam::DVec3;
 
 /// The segment `a → b` between two consecutive ball centres (`a == b` for a lone centre: a
@@ -86,7 +87,7 @@ impl Capsule {
             if b < 0.0 {
                 let disc = b * b - c;
                 if disc >= 0.0 {
-                    best = best.min(c / (disc.sqrt() - b));
+                    best = num::min(best, c / (disc.sqrt() - b));
                 }
             }
         }

@@ -4,6 +4,7 @@
 use super::capsule::Capsule;
 use super::VerifyError;
 use crate::bvh::{self, Node};
+use crate::num;
 use glam::DVec3;
 
 /// Capsules of radius R between consecutive ball centres of every pass, in path order, with a
@@ -166,7 +167,7 @@ impl<'a> Prober<'a> {
         let root = &bvh.nodes[0];
         self.stack.push((0, root.distance2(p), root.distance2(q)));
         while let Some((index, dp2, dq2)) = self.stack.pop() {
-            let reach = r + best.min(max_t) + margin;
+            let reach = r + num::min(best, max_t) + margin;
             if dp2 > reach * reach && dq2 > r2 {
                 continue;
             }
@@ -175,11 +176,11 @@ impl<'a> Prober<'a> {
                 let range = node.start as usize..(node.start + node.count) as usize;
                 for (c, &id) in bvh.slots[range.clone()].iter().zip(&bvh.ids[range]) {
                     let dp = c.distance(p);
-                    nearest = nearest.min(dp);
+                    nearest = num::min(nearest, dp);
                     if c.distance(q) <= r {
                         self.covering.push(id);
                     }
-                    let bound = best.min(max_t);
+                    let bound = num::min(best, max_t);
                     let t = if dp <= r {
                         0.0
                     } else if dp - r > bound + margin {
@@ -188,7 +189,7 @@ impl<'a> Prober<'a> {
                     } else {
                         c.entry_from_outside(p, n, r).unwrap_or(f64::INFINITY)
                     };
-                    best = best.min(t);
+                    best = num::min(best, t);
                 }
                 continue;
             }
