@@ -205,7 +205,8 @@ fn a_larger_alpha_gives_smoother_and_no_shorter_paths() {
         let (length, rho2) = (plan.report.path.length_mm, plan.report.path.rho2);
         println!("α {alpha}: {length:.1} mm, ρ² {rho2:.1}, E_n + E_g {bending:.4}");
         if let Some(&(l, _, b)) = rows.last() {
-            assert!(length >= l * 0.999, "α {alpha}: {length} mm after {l} mm");
+            // Within 2 %: the gate's cusp search (stop 39) moves each field's rings by about 1 % either way.
+            assert!(length >= l * 0.98, "α {alpha}: {length} mm after {l} mm");
             assert!(bending <= b * 1.001, "α {alpha}: E_n + E_g {bending} after {b}");
         }
         rows.push((length, rho2, bending));
