@@ -897,14 +897,9 @@ impl PeakAt {
         let (pa, pb, pc) = (corner(a)?, corner(b)?, corner(c)?);
         let w = |v: u32| map.w.get(v as usize).copied();
         let (wa, wb, wc) = (w(a)?, w(b)?, w(c)?);
-        // Barycentric coordinates of the sample (it lies on the face).
-        let p = DVec3::from_array(at.position);
-        let (e0, e1, e2) = (pb - pa, pc - pa, p - pa);
-        let (d00, d01, d11, d20, d21) = (e0.dot(e0), e0.dot(e1), e1.dot(e1), e2.dot(e0), e2.dot(e1));
-        let den = d00 * d11 - d01 * d01;
-        let (v, u) =
-            if den > 0.0 { ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den) } else { (0.0, 0.0) };
-        let image = wa * (1.0 - v - u) + wb * v + wc * u;
+        // The sample lies on the face: its barycentric coordinates are its closest point's.
+        let [ba, bb, bc] = crate::mesh::nearest::closest_on_triangle(DVec3::from_array(at.position), pa, pb, pc);
+        let image = wa * ba + wb * bb + wc * bc;
         let rho = image.length();
         let inside = radii.iter().position(|&r| r <= rho);
         let outside = match inside {

@@ -21,6 +21,7 @@
 
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
+use crate::num;
 use crate::slitmap::SlitMap;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
@@ -187,8 +188,6 @@ impl<'a> Gate<'a> {
 
     /// The lines |w| = const of the band (`lo`, `hi`) across face `f`.
     fn face_lines(&self, f: usize, lo: f64, hi: f64, out: &mut Vec<GatePoint>) {
-        let s = self.surface;
-        let t = &s.triangles[f];
         let (r0, r1) = self.rho_range[f];
         if !(r1 > lo && r0 < hi) {
             return;
@@ -196,25 +195,13 @@ impl<'a> Gate<'a> {
         let width = (hi - lo) / self.rho_gradient[f];
         let least = if self.lift_h.is_some() { MIN_STRIPS_LIFTED } else { MIN_STRIPS };
         let strips = (width / (STRIP * self.radius_mm)).clamp(least, 64.0).log2().ceil().exp2() as usize;
-        let c = self.corners[f];
         for k in 1..strips {
             let level = hi - (hi - lo) * k as f64 / strips as f64;
             if !(level > r0 && level < r1) {
                 continue;
             }
-            let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
-            let mut found = 0;
-            for e in 0..3 {
-                let (i, j) = (e, (e + 1) % 3);
-                if found < 2 && ((c[i].y < level) != (c[j].y < level)) {
-                    let u = (level - c[i].y) / (c[j].y - c[i].y);
-                    let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
-                    ends[found] = self.end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
-                    found += 1;
-                }
-            }
-            if found == 2 {
-                line(ends[0], ends[1], LINE_STEP * self.radius_mm, 2.0, self.lift_of(f), out);
+            if let Some([a, b]) = self.chord(f, level, |w| w.y) {
+                line(a, b, LINE_STEP * self.radius_mm, 2.0, self.lift_of(f), out);
             }
         }
     }
@@ -228,8 +215,6 @@ impl<'a> Gate<'a> {
         if !(r1 > lo && r0 < hi) {
             return;
         }
-        let s = self.surface;
-        let t = &s.triangles[f];
         let c = self.corners[f];
         let (x0, x1) = (c[0].x.min(c[1].x).min(c[2].x), c[0].x.max(c[1].x).max(c[2].x));
         if !(x1 > x0) {
@@ -237,21 +222,7 @@ impl<'a> Gate<'a> {
         }
         for k in 1..CROSSINGS {
             let x = x0 + (x1 - x0) * k as f64 / CROSSINGS as f64;
-            let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
-            let mut found = 0;
-            for e in 0..3 {
-                let (i, j) = (e, (e + 1) % 3);
-                if found < 2 && ((c[i].x < x) != (c[j].x < x)) {
-                    let u = (x - c[i].x) / (c[j].x - c[i].x);
-                    let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
-                    ends[found] = self.end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
-                    found += 1;
-                }
-            }
-            if found < 2 {
-                continue;
-            }
-            let [a, b] = ends;
+            let Some([a, b]) = self.chord(f, x, |w| w.x) else { continue };
             let (u0, u1) = clip(a.2.y, b.2.y, lo, hi);
             if u1 > u0 {
                 let end = |u: f64| (a.0.lerp(b.0, u), a.1.lerp(b.1, u), a.2.lerp(b.2, u));
@@ -260,6 +231,25 @@ impl<'a> Gate<'a> {
                 cutter.add_cusps(end(u0), end(u1), first, self.lift_of(f), out);
             }
         }
+    }
+
+    /// The ends of the line `coord(w) = level` across face `f` (`coord` picks arg w or |w| of
+    /// its log-polar corners); `None` where the line misses the face.
+    fn chord(&self, f: usize, level: f64, coord: impl Fn(DVec2) -> f64) -> Option<[End; 2]> {
+        let (s, t, c) = (self.surface, &self.surface.triangles[f], self.corners[f]);
+        let mut ends = [(DVec3::ZERO, DVec3::ZERO, DVec2::ZERO); 2];
+        let mut found = 0;
+        for e in 0..3 {
+            let (i, j) = (e, (e + 1) % 3);
+            let (ci, cj) = (coord(c[i]), coord(c[j]));
+            if found < 2 && ((ci < level) != (cj < level)) {
+                let u = (level - ci) / (cj - ci);
+                let normals = [s.corner_normal(f, i), s.corner_normal(f, j)];
+                ends[found] = self.end([t[i] as usize, t[j] as usize], normals, c[i], c[j], u);
+                found += 1;
+            }
+        }
+        (found == 2).then_some(ends)
     }
 
     /// What the planned lift of a ball touching face `f` depends on (see [`Lowered`]).
@@ -440,41 +430,38 @@ impl RingLine {
     /// the fast answer for a point of a band, whose nearest centres are almost always on its
     /// own meridian. `false` is not conclusive.
     fn near_theta_within(&self, q: DVec3, theta: f64, r: f64) -> bool {
+        match self.segments_near(theta, LOCAL_SEGMENTS) {
+            Some(mut segments) => segments.any(|(a, b)| super::segment_dist2(q, a, b) <= r * r),
+            None => self.centres.first().is_some_and(|c| c.distance_squared(q) <= r * r),
+        }
+    }
+
+    /// The squared distance from `q` to the segments within `window` of angle `theta`: the
+    /// distance to the ring where its nearest centres are on the point's own meridian, as they
+    /// almost always are (else an overestimate).
+    fn near_dist2(&self, q: DVec3, theta: f64, window: isize) -> f64 {
+        match self.segments_near(theta, window) {
+            Some(segments) => segments.map(|(a, b)| super::segment_dist2(q, a, b)).fold(f64::INFINITY, num::min),
+            None => self.centres.first().map_or(f64::INFINITY, |c| c.distance_squared(q)),
+        }
+    }
+
+    /// The segments within `window` of angle `theta`, outwards from it (where the nearest
+    /// almost always is); `None` for a ring of fewer than two centres.
+    fn segments_near(&self, theta: f64, window: isize) -> Option<impl Iterator<Item = (DVec3, DVec3)> + '_> {
         let n = self.centres.len();
         if n < 2 {
-            return self.centres.first().is_some_and(|c| c.distance_squared(q) <= r * r);
+            return None;
         }
         let t = crate::num::rem_tau(theta);
         let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
         // The ring closes: centre n − 1 is centre 0, so segments wrap modulo n − 1.
         let m = (n - 1) as isize;
-        // Outwards from the point's own angle, where the answer almost always is.
-        (0..=2 * LOCAL_SEGMENTS).any(|k| {
+        Some((0..=2 * window).map(move |k| {
             let offset = if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 };
             let j = (i as isize + offset).rem_euclid(m) as usize;
-            super::segment_dist2(q, self.centres[j], self.centres[j + 1]) <= r * r
-        })
-    }
-}
-
-impl RingLine {
-    /// The squared distance from `q` to the segments within `window` of angle `theta`: the
-    /// distance to the ring where its nearest centres are on the point's own meridian, as they
-    /// almost always are (else an overestimate).
-    fn near_dist2(&self, q: DVec3, theta: f64, window: isize) -> f64 {
-        let n = self.centres.len();
-        if n < 2 {
-            return self.centres.first().map_or(f64::INFINITY, |c| c.distance_squared(q));
-        }
-        let t = crate::num::rem_tau(theta);
-        let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
-        let m = (n - 1) as isize;
-        (-window..=window)
-            .map(|offset| {
-                let j = (i as isize + offset).rem_euclid(m) as usize;
-                super::segment_dist2(q, self.centres[j], self.centres[j + 1])
-            })
-            .fold(f64::INFINITY, f64::min)
+            (self.centres[j], self.centres[j + 1])
+        }))
     }
 }
 
@@ -546,10 +533,10 @@ impl<'r> Cutter<'r> {
     /// points a fixed step apart pass up to step·√(h/2R) under it, more than h on coarse
     /// meshes (issue 34's sweep: 1.1–1.3 h between the gate's points on 3k–12k-face parts).
     fn add_cusps(&self, a: End, b: End, first: usize, lift: Option<Lowered>, out: &mut Vec<GatePoint>) {
-        let count = out.len() - first;
         if self.rings.len() != 2 {
             return;
         }
+        let count = out.len() - first;
         let at = |u: f64| -> GatePoint {
             let w = a.2.lerp(b.2, u);
             let n = a.1.lerp(b.1, u).normalize_or_zero();
@@ -560,7 +547,8 @@ impl<'r> Cutter<'r> {
         // the band's rings where the edge crosses it whole) they bracket every cusp.
         let us: Vec<f64> =
             std::iter::once(0.0).chain((0..count).map(|i| (i as f64 + 0.5) / count as f64)).chain([1.0]).collect();
-        let sides: Vec<Option<f64>> = us.iter().map(|&u| self.side(&at(u))).collect();
+        let laid = |i: usize| if i == 0 || i > count { at(us[i]) } else { out[first + i - 1] };
+        let sides: Vec<Option<f64>> = (0..us.len()).map(|i| self.side(&laid(i))).collect();
         for i in 0..us.len() - 1 {
             let (Some(mut fa), Some(mut fb)) = (sides[i], sides[i + 1]) else { continue };
             if (fa > 0.0) == (fb > 0.0) {

@@ -377,7 +377,8 @@ fn verify_on(
         gouges: f.gouges,
         max_gouge_mm: f.max_gouge,
         valley_area_mm2,
-        max_scallop_outside_valleys_mm: f.max_outside_valleys,
+        // The largest outside the valleys, and 0 without one (as the report's other maxima).
+        max_scallop_outside_valleys_mm: f.worst_outside_valleys_at.map_or(0.0, |w| w.scallop_mm.max(0.0)),
         ct2: f.ct2_sum as f64 * area_per_sample,
         max_ct: f.max_ct,
         mean_ct: f.ct_sum as f64 / n as f64,
@@ -385,7 +386,7 @@ fn verify_on(
         segments: volume.segments(),
         vertex_scallop_mm,
         vertex_uncovered,
-        worst_sample: f.worst.map(|(_, p)| p.to_array()),
+        worst_sample: f.worst_at.map(|w| w.position),
         max_scallop_at: f.worst_at,
         max_outside_valleys_at: f.worst_outside_valleys_at,
     })
@@ -403,10 +404,8 @@ struct SampleFigures {
     max_ct: u32,
     v_max: f64,
     v_cells: usize,
-    worst: Option<(f64, DVec3)>,
     worst_at: Option<ScallopAt>,
     worst_outside_valleys_at: Option<ScallopAt>,
-    max_outside_valleys: f64,
 }
 
 fn sample_figures(
@@ -417,12 +416,10 @@ fn sample_figures(
     gouge_tolerance_mm: f64,
     valleys: Option<&[bool]>,
 ) -> SampleFigures {
-    let mut max_outside_valleys = 0.0f64;
     let mut scallops = Vec::with_capacity(samples.len());
     let mut cells: Vec<([i64; 3], f64)> = Vec::with_capacity(samples.len());
     let (mut gouges, mut max_gouge) = (0usize, 0.0f64);
     let (mut ct_sum, mut ct2_sum, mut max_ct) = (0u64, 0u64, 0u32);
-    let mut worst: Option<(f64, DVec3)> = None;
     let (mut worst_at, mut worst_outside_valleys_at): (Option<ScallopAt>, Option<ScallopAt>) = (None, None);
     let origin = surface.positions.iter().fold(DVec3::splat(f64::INFINITY), |m, &p| m.min(p));
     for (i, (s, probe)) in samples.iter().zip(probes).enumerate() {
@@ -444,20 +441,14 @@ fn sample_figures(
                 face: s.face,
                 in_valley,
             };
-            if !in_valley {
-                max_outside_valleys = max_outside_valleys.max(t);
-                if !worst_outside_valleys_at.is_some_and(|w| w.scallop_mm >= t) {
-                    worst_outside_valleys_at = Some(at());
-                }
+            if !in_valley && !worst_outside_valleys_at.is_some_and(|w| w.scallop_mm >= t) {
+                worst_outside_valleys_at = Some(at());
             }
             if !worst_at.is_some_and(|w| w.scallop_mm >= t) {
                 worst_at = Some(at());
             }
             let key = ((s.position - origin) / cell).floor();
             cells.push(([key.x as i64, key.y as i64, key.z as i64], t));
-            if !matches!(worst, Some((w, _)) if w >= t) {
-                worst = Some((t, s.position));
-            }
         }
     }
     let uncovered = samples.len() - scallops.len();
@@ -475,10 +466,8 @@ fn sample_figures(
         max_ct,
         v_max,
         v_cells,
-        worst,
         worst_at,
         worst_outside_valleys_at,
-        max_outside_valleys,
     }
 }
 
