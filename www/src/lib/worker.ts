@@ -80,8 +80,10 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   }
   const started = performance.now();
   const progress = (stage: string, done: number) => post({ type: "progress", id: request.id, stage, done, total: 3 });
-  const { faces: _, ...stepOptions } = request.stepOptions ?? {};
-  const read = await stepFaces(bytes, stepOptions, progress);
+  const stepOptions = request.stepOptions ?? {};
+  // The faces list and view show all the file's faces; the part is made of those asked for.
+  const { faces: _, ...allFaces } = stepOptions;
+  const read = await stepFaces(bytes, allFaces, progress);
   progress("preparing the face view", 2);
   const step: StepPart = {
     name: request.name,
@@ -93,8 +95,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   };
   stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, faces: read.faces };
   try {
-    const asked = request.stepOptions?.faces;
-    await loadPart(request.id, request.name, bytes, request.meshOptions, asked ? { ...stepOptions, faces: asked } : stepOptions, step, started);
+    await loadPart(request.id, request.name, bytes, request.meshOptions, stepOptions, step, started);
   } catch (error) {
     if (isFatal(error)) throw error;
     throw new SelectionError(errorMessage(error), step);
@@ -192,8 +193,8 @@ async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promis
   const partName = stepFile.name.replace(/\.[^./\\]*$/, "") || "part";
   const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName });
   post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
-  const radiusMm = request.options.radiusMm ?? 3;
-  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, radiusMm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
+  // The report's radius is the one planned with (the core's default when none was given).
+  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, output.report.radius_mm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
   const { drawing: d } = result;
   post(
     { type: "coonsPlanned", id: request.id, plan: result },
