@@ -36,7 +36,7 @@ let current:
   | undefined;
 
 /** The STEP file loaded last (its faces can be chosen again, and the Coons band reads it). */
-let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; faces: StepFace[] } | undefined;
+let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
 
 /** A STEP file could be read but not made the part with the faces asked for: the faces go with the error. */
 class SelectionError extends Error {
@@ -93,7 +93,7 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     readMs: read.readMs,
     tessellateMs: read.tessellateMs,
   };
-  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, faces: read.faces };
+  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, stepOptions: allFaces, faces: read.faces };
   try {
     await loadPart(request.id, request.name, bytes, request.meshOptions, stepOptions, step, started);
   } catch (error) {
@@ -109,7 +109,8 @@ async function selectFaces(request: Extract<WorkerRequest, { type: "selectFaces"
   const known = new Set(stepFile.faces.map((f) => f.id));
   const unknown = request.faces.find((f) => !known.has(f));
   if (unknown !== undefined) throw new Error(`face #${unknown} is not a face of ${stepFile.name}`);
-  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { faces: request.faces }, null);
+  // The load's tessellation options (chordal tolerance, edge and triangle limits) stay.
+  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { ...stepFile.stepOptions, faces: request.faces }, null);
 }
 
 async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions: MeshOptions | undefined, stepOptions: StepOptions | undefined, step: StepPart | null, started = performance.now()): Promise<void> {
