@@ -6,7 +6,7 @@ import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
 import { after, before, describe, it } from "node:test";
-import { cli, launch, output, root, screenshotPath, serve, viewStats } from "./harness.mjs";
+import { cli, launch, output, replan as replanStatus, root, screenshotPath, serve, settled as settledStatus, viewStats } from "./harness.mjs";
 
 const PLAN_TIMEOUT = 180_000;
 const BLADE = join(root, "www/public/samples/blade.stl");
@@ -15,21 +15,8 @@ describe("the flank strategy on the page", { concurrency: false }, () => {
   let server, browser, page;
   const consoleErrors = [];
 
-  const status = () => page.getByTestId("status").textContent();
-  const settled = async () => {
-    await page.waitForFunction(
-      () => /^(planned|error: |cancelled)/.test(document.querySelector("[data-testid=status]")?.textContent ?? ""),
-      undefined,
-      { timeout: PLAN_TIMEOUT },
-    );
-    return status();
-  };
-  /** Waits for a new outcome after `action` (the status is cleared first). */
-  const replan = async (action) => {
-    await page.evaluate(() => (document.querySelector("[data-testid=status]").textContent = "…"));
-    await action();
-    return settled();
-  };
+  const settled = () => settledStatus(page, PLAN_TIMEOUT);
+  const replan = (action) => replanStatus(page, action, PLAN_TIMEOUT);
   const shot = (name) => page.screenshot({ path: screenshotPath(name), fullPage: true });
   const metric = async (id) => (await page.getByTestId(id).textContent()) ?? "";
 

@@ -91,6 +91,26 @@ export function viewStats(page, testId) {
   }, testId);
 }
 
+/**
+ * Waits until the page's status leaves "loading"/"planning" (reads `planned`, `error: …` or
+ * `cancelled`) and returns it.
+ */
+export async function settled(page, timeout) {
+  await page.waitForFunction(
+    () => /^(planned|error: |cancelled)/.test(document.querySelector("[data-testid=status]")?.textContent ?? ""),
+    undefined,
+    { timeout },
+  );
+  return page.getByTestId("status").textContent();
+}
+
+/** Waits for a new outcome after `action` (the status is cleared first), and returns it. */
+export async function replan(page, action, timeout) {
+  await page.evaluate(() => (document.querySelector("[data-testid=status]").textContent = "…"));
+  await action();
+  return settled(page, timeout);
+}
+
 /** Runs the slitpath CLI (the release binary `npm test` built, else through cargo). */
 export function cli(...args) {
   const binary = join(process.env.CARGO_TARGET_DIR ? resolve(root, process.env.CARGO_TARGET_DIR) : join(root, "target"), "release/slitpath");

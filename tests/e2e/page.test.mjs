@@ -5,7 +5,7 @@ import assert from "node:assert/strict";
 import { readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { after, before, describe, it } from "node:test";
-import { cli, launch, output, root, screenshotPath, serve, viewStats } from "./harness.mjs";
+import { cli, launch, output, replan as replanStatus, root, screenshotPath, serve, settled as settledStatus, viewStats } from "./harness.mjs";
 
 const PLAN_TIMEOUT = 60_000;
 const SAMPLE = join(root, "www/public/samples/freeform_4_holes.stl");
@@ -15,23 +15,9 @@ describe("the planner page", { concurrency: false }, () => {
   const foreign = [];
   const consoleErrors = [];
 
-  const status = () => page.getByTestId("status").textContent();
-  /** Waits until the status leaves `planning`/`loading`, and returns it. */
-  const settled = async () => {
-    await page.waitForFunction(
-      () => /^(planned|error: |cancelled)/.test(document.querySelector("[data-testid=status]")?.textContent ?? ""),
-      undefined,
-      { timeout: PLAN_TIMEOUT },
-    );
-    return status();
-  };
+  const settled = () => settledStatus(page, PLAN_TIMEOUT);
   const rings = async () => Number((await page.getByTestId("metric-rings").textContent()).replace(/,/g, ""));
-  /** Waits for a new plan after `action` (the status goes through `planning`). */
-  const replan = async (action) => {
-    await page.evaluate(() => (document.querySelector("[data-testid=status]").textContent = "…"));
-    await action();
-    return settled();
-  };
+  const replan = (action) => replanStatus(page, action, PLAN_TIMEOUT);
   const shot = (name) => page.screenshot({ path: screenshotPath(name), fullPage: true });
 
   before(async () => {

@@ -8,7 +8,7 @@ import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
 import { after, before, describe, it } from "node:test";
-import { cli, launch, output, root, screenshotPath, serve, viewStats } from "./harness.mjs";
+import { cli, launch, output, replan as replanStatus, root, screenshotPath, serve, settled as settledStatus, viewStats } from "./harness.mjs";
 
 const PLAN_TIMEOUT = 180_000;
 const SAMPLE = join(root, "www/public/samples/blade_band.step");
@@ -17,20 +17,8 @@ const FACES = [156, 176, 196, 216, 232, 248, 264, 280];
 describe("STEP input on the page", { concurrency: false }, () => {
   let server, browser, page;
 
-  const status = () => page.getByTestId("status").textContent();
-  const settled = async () => {
-    await page.waitForFunction(
-      () => /^(planned|error: |cancelled)/.test(document.querySelector("[data-testid=status]")?.textContent ?? ""),
-      undefined,
-      { timeout: PLAN_TIMEOUT },
-    );
-    return status();
-  };
-  const replan = async (action) => {
-    await page.evaluate(() => (document.querySelector("[data-testid=status]").textContent = "…"));
-    await action();
-    return settled();
-  };
+  const settled = () => settledStatus(page, PLAN_TIMEOUT);
+  const replan = (action) => replanStatus(page, action, PLAN_TIMEOUT);
   const metric = async (id) => (await page.getByTestId(id).textContent()) ?? "";
   const ticked = () => page.evaluate(() => [...document.querySelectorAll("[data-testid^=face-]")].filter((b) => b.type === "checkbox" && b.checked).map((b) => Number(b.dataset.testid.slice(5))));
   /** Clicks face `index` (list order) where the 3D view shows it; false when it is hidden from this view. */

@@ -60,10 +60,10 @@ let urlFaces = facesFromQuery(location.search);
 const strategySelect = byId<HTMLSelectElement>("opt-strategy");
 
 /**
- * The part shown (its generation changes with every load) and the last good plan of it. Their
- * big arrays went to the render worker: what stays here is the report, the G-code and counts.
+ * The part shown and the last good plan of it. Their big arrays went to the render worker: what
+ * stays here is the report, the G-code and counts.
  */
-let part: { loaded: LoadedPart; generation: number } | null = null;
+let part: LoadedPart | null = null;
 let shown:
   | { gcode: string; strategy: "spiral"; options: FullPlanOptions }
   | { gcode: string; strategy: "flank"; flank: FlankFormOptions }
@@ -71,6 +71,7 @@ let shown:
   | null = null;
 /** The name of the file loaded last (a STEP file may have no part yet: its faces are not one surface). */
 let fileName = "";
+/** Changes with every part shown (a plan of an older one is not shown). */
 let generation = 0;
 let planning = false;
 let replanWanted = false;
@@ -134,8 +135,7 @@ async function loadStl(name: string, read: (onProgress: (fraction: number) => vo
       shown = null;
       part = null;
       ++generation;
-      stepPage.show(error.step, asked);
-      stepPage.setPart(null);
+      stepPage.show(error.step, asked); // with no part of them
       byId("part-name").textContent = `${name} — ${error.step.faces.length} STEP faces`;
       setOutputs();
       showState();
@@ -149,7 +149,8 @@ async function loadStl(name: string, read: (onProgress: (fraction: number) => vo
 
 /** Shows a part made ready by the worker (an STL, or STEP faces): its report and surface. */
 function showPart(loaded: LoadedPart): void {
-  part = { loaded, generation: ++generation };
+  part = loaded;
+  ++generation;
   const faces = loaded.stepFaces ? ` (${loaded.stepFaces.length} STEP faces)` : "";
   byId("part-name").textContent = `${loaded.name} — ${loaded.report.machined?.faces ?? loaded.report.faces} faces${faces}`;
   renderReport(byId("report"), loaded.report, loaded.name);
@@ -236,9 +237,8 @@ async function show(result: PlanResult, planned: FullPlanOptions): Promise<void>
   legend.hidden = !layerHeat.checked;
   setOutputs();
   const { path } = result.report;
-  const name = part?.loaded.name ?? "";
   await drawn;
-  setStatus("planned", `${name}: ${result.ringRadii.length} rings, ${path.length_mm.toFixed(0)} mm, ${path.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
+  setStatus("planned", `${fileName}: ${result.ringRadii.length} rings, ${path.length_mm.toFixed(0)} mm, ${path.time_min.toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
 /** Shows a flank plan: the part coloured by the verifier's deviation, the strips' tips and axes. */
@@ -259,10 +259,9 @@ async function showFlank(result: FlankResult, planned: FlankFormOptions): Promis
   byId("legend-extra").hidden = true;
   legend.hidden = !layerHeat.checked;
   setOutputs();
-  const name = part?.loaded.name ?? "";
   const { output } = result.report;
   await drawn;
-  setStatus("planned", `${name}: flank, ${result.report.guide.strips} strips, ${output.moves} moves, ${(output.estimated_time_s / 60).toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
+  setStatus("planned", `${fileName}: flank, ${result.report.guide.strips} strips, ${output.moves} moves, ${(output.estimated_time_s / 60).toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
 /** Shows a Coons band plan: the path on the STEP faces, the tool and its axes. */
@@ -291,7 +290,7 @@ function showStrategy(shownStrategy: Strategy): void {
 
 function setOutputs(): void {
   downloadGcode.disabled = downloadCl.disabled = shown === null;
-  const post = shown === null ? postOf(strategy) : shownPost();
+  const post = shownPost();
   downloadGcode.textContent = post === "cl" ? "Download CL data" : `Download G-code (${post})`;
 }
 

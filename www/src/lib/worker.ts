@@ -36,7 +36,7 @@ let current:
   | undefined;
 
 /** The STEP file loaded last (its faces can be chosen again, and the Coons band reads it). */
-let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; faces: StepFace[] } | undefined;
+let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
 
 /** A STEP file could be read but not made the part with the faces asked for: the faces go with the error. */
 class SelectionError extends Error {
@@ -80,8 +80,10 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   }
   const started = performance.now();
   const progress = (stage: string, done: number) => post({ type: "progress", id: request.id, stage, done, total: 3 });
-  const { faces: _, ...stepOptions } = request.stepOptions ?? {};
-  const read = await stepFaces(bytes, stepOptions, progress);
+  const stepOptions = request.stepOptions ?? {};
+  // The faces list and view show all the file's faces; the part is made of those asked for.
+  const { faces: _, ...allFaces } = stepOptions;
+  const read = await stepFaces(bytes, allFaces, progress);
   progress("preparing the face view", 2);
   const step: StepPart = {
     name: request.name,
@@ -91,10 +93,9 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     readMs: read.readMs,
     tessellateMs: read.tessellateMs,
   };
-  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, faces: read.faces };
+  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, stepOptions: allFaces, faces: read.faces };
   try {
-    const asked = request.stepOptions?.faces;
-    await loadPart(request.id, request.name, bytes, request.meshOptions, asked ? { ...stepOptions, faces: asked } : stepOptions, step, started);
+    await loadPart(request.id, request.name, bytes, request.meshOptions, stepOptions, step, started);
   } catch (error) {
     if (isFatal(error)) throw error;
     throw new SelectionError(errorMessage(error), step);
@@ -108,7 +109,8 @@ async function selectFaces(request: Extract<WorkerRequest, { type: "selectFaces"
   const known = new Set(stepFile.faces.map((f) => f.id));
   const unknown = request.faces.find((f) => !known.has(f));
   if (unknown !== undefined) throw new Error(`face #${unknown} is not a face of ${stepFile.name}`);
-  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { faces: request.faces }, null);
+  // The load's tessellation options (chordal tolerance, edge and triangle limits) stay.
+  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { ...stepFile.stepOptions, faces: request.faces }, null);
 }
 
 async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions: MeshOptions | undefined, stepOptions: StepOptions | undefined, step: StepPart | null, started = performance.now()): Promise<void> {
@@ -192,8 +194,8 @@ async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promis
   const partName = stepFile.name.replace(/\.[^./\\]*$/, "") || "part";
   const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName });
   post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
-  const radiusMm = request.options.radiusMm ?? 3;
-  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, radiusMm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
+  // The report's radius is the one planned with (the core's default when none was given).
+  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, output.report.radius_mm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
   const { drawing: d } = result;
   post(
     { type: "coonsPlanned", id: request.id, plan: result },

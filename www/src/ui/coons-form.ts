@@ -4,10 +4,11 @@
 
 import { parseCoons, type CoonsFormOptions } from "../coons-options";
 import { el } from "./dom";
+import { fieldRow, readFields, type FieldInput, type FieldSpec } from "./fields";
 
 type Key = keyof CoonsFormOptions;
 
-const FIELDS: { key: Key; id: string; label: string; unit?: string; choices?: [string, string][] }[] = [
+const FIELDS: (FieldSpec & { key: Key })[] = [
   { key: "radiusMm", id: "radius", label: "Ball radius R", unit: "mm" },
   { key: "scallopMm", id: "scallop", label: "Scallop h", unit: "mm" },
   { key: "axes", id: "axes", label: "Axes", choices: [["5", "5-axis (lead/tilt)"], ["3", "3-axis"]] },
@@ -21,7 +22,7 @@ const FIELDS: { key: Key; id: string; label: string; unit?: string; choices?: [s
 ];
 
 export class CoonsForm {
-  private readonly inputs = new Map<Key, HTMLInputElement | HTMLSelectElement>();
+  private readonly inputs = new Map<Key, FieldInput>();
 
   onChange: (options: CoonsFormOptions) => void = () => {};
   onInvalid: (message: string) => void = () => {};
@@ -29,21 +30,9 @@ export class CoonsForm {
   constructor(container: HTMLElement, private current: CoonsFormOptions) {
     const box = el("fieldset", { className: "options" }, el("legend", { text: "Coons band spiral (seed 004)" }));
     for (const field of FIELDS) {
-      let input: HTMLInputElement | HTMLSelectElement;
-      if (field.choices) {
-        input = el("select");
-        for (const [value, text] of field.choices) input.append(new Option(text, value));
-      } else {
-        input = el("input");
-        input.type = "text";
-        input.inputMode = "decimal";
-        input.autocomplete = "off";
-      }
-      input.id = `opt-coons-${field.id}`;
-      input.dataset["testid"] = `opt-coons-${field.id}`;
+      const { row, input } = fieldRow("opt-coons-", field);
       this.inputs.set(field.key, input);
-      const unit = field.unit ? el("span", { text: field.unit, className: "unit" }) : "";
-      box.append(el("label", { className: "field" }, el("span", { text: field.label }), input, unit));
+      box.append(row);
     }
     container.replaceChildren(box);
     this.set(current);
@@ -60,17 +49,7 @@ export class CoonsForm {
 
   private edited(): void {
     const out: Record<string, unknown> = { ...this.current };
-    const bad: string[] = [];
-    for (const [key, input] of this.inputs) {
-      const value = parseCoons(key, input.value);
-      if (value === undefined) {
-        input.setAttribute("aria-invalid", "true");
-        bad.push(input.closest("label")?.firstChild?.textContent ?? key);
-      } else {
-        input.removeAttribute("aria-invalid");
-        out[key] = value;
-      }
-    }
+    const bad = readFields(this.inputs, out, (key, input) => parseCoons(key, input.value));
     if (bad.length > 0) return this.onInvalid(`${bad.join(", ")}: enter valid numbers`);
     this.current = out as unknown as CoonsFormOptions;
     this.onChange(this.current);

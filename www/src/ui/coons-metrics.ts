@@ -3,13 +3,12 @@
 
 import type { CoonsResult } from "../lib/index";
 import { el } from "./dom";
+import { metricsTable, timingLines, type Row } from "./metrics-table";
 
 const n0 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 0 });
 const n3 = new Intl.NumberFormat("en-US", { maximumSignificantDigits: 3 });
 const mm = (v: number) => `${n3.format(v)} mm`;
 const deg = (v: number) => `${n3.format(v)}°`;
-
-type Row = [testId: string, label: string, value: string, warn?: boolean];
 
 function rows(plan: CoonsResult): Row[] {
   const r = plan.report;
@@ -32,21 +31,6 @@ function rows(plan: CoonsResult): Row[] {
 
 /** Replaces the panel's content with the metrics of a Coons band plan. */
 export function renderCoonsMetrics(container: HTMLElement, plan: CoonsResult): void {
-  const body = el("tbody");
-  for (const [testId, label, value, warn] of rows(plan)) {
-    const td = el("td", { text: value, testId });
-    if (warn) td.classList.add("warn");
-    body.append(el("tr", {}, el("th", { text: label }), td));
-  }
-  const timings = Object.entries(plan.report.timings)
-    .filter(([stage]) => stage !== "total")
-    .map(([stage, ms]) => `${stage} ${n0.format(ms)}`)
-    .join(" · ");
   const note = plan.report.seams.note ? [el("p", { className: "hint", text: `Seams: ${plan.report.seams.note}` })] : [];
-  container.replaceChildren(
-    el("table", { className: "metrics-table" }, body),
-    ...note,
-    el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(plan.report.timings["total"] ?? plan.ms)}` }),
-    el("p", { className: "timings", testId: "metric-memory", text: `Planner memory: ${n0.format(plan.wasmMemoryBytes / 2 ** 20)} MiB` }),
-  );
+  container.replaceChildren(metricsTable(rows(plan)), ...note, ...timingLines(plan.report.timings, plan.ms, plan.wasmMemoryBytes));
 }

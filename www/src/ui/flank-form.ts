@@ -8,18 +8,11 @@
 import type { FlankFormOptions } from "../lib/defaults";
 import { formatFlank, parseFlank } from "../flank-options";
 import { el } from "./dom";
+import { fieldRow, readFields, type FieldInput, type FieldSpec } from "./fields";
 
 type Key = keyof FlankFormOptions;
 
-interface Field {
-  key: Key;
-  id: string;
-  label: string;
-  unit?: string;
-  placeholder?: string;
-  hint?: string;
-  choices?: [string, string][];
-}
+type Field = FieldSpec & { key: Key };
 
 const TOOL: Field[] = [
   { key: "tipRadiusMm", id: "tip", label: "Tip radius", unit: "mm" },
@@ -30,7 +23,7 @@ const TOOL: Field[] = [
   { key: "holderRadiusMm", id: "holder", label: "Holder radius", unit: "mm", placeholder: "2 × shank" },
 ];
 const PATH: Field[] = [
-  { key: "direction", id: "direction", label: "Direction X,Y,Z", hint: "the strips run along it; the shank points along n × direction" },
+  { key: "direction", id: "direction", label: "Direction X,Y,Z", inputMode: "text", hint: "the strips run along it; the shank points along n × direction" },
   { key: "strips", id: "strips", label: "Strips", placeholder: "auto" },
   {
     key: "weights",
@@ -49,7 +42,7 @@ const MACHINE: Field[] = [
 ];
 
 export class FlankForm {
-  private readonly inputs = new Map<Key, HTMLInputElement | HTMLSelectElement>();
+  private readonly inputs = new Map<Key, FieldInput>();
 
   /** Called with valid options after every edit. */
   onChange: (options: FlankFormOptions) => void = () => {};
@@ -71,28 +64,12 @@ export class FlankForm {
 
   private group(title: string, fields: Field[]): HTMLElement {
     const box = el("fieldset", { className: "options" }, el("legend", { text: title }));
-    for (const field of fields) box.append(this.row(field));
-    return box;
-  }
-
-  private row(field: Field): HTMLElement {
-    let input: HTMLInputElement | HTMLSelectElement;
-    if (field.choices) {
-      input = el("select");
-      for (const [value, text] of field.choices) input.append(new Option(text, value));
-    } else {
-      input = el("input");
-      input.type = "text";
-      input.inputMode = field.key === "direction" ? "text" : "decimal";
-      input.autocomplete = "off";
-      if (field.placeholder) input.placeholder = field.placeholder;
+    for (const field of fields) {
+      const { row, input } = fieldRow("opt-flank-", field);
+      this.inputs.set(field.key, input);
+      box.append(row);
     }
-    input.id = `opt-flank-${field.id}`;
-    input.dataset["testid"] = `opt-flank-${field.id}`;
-    if (field.hint) input.title = field.hint;
-    this.inputs.set(field.key, input);
-    const unit = field.unit ? el("span", { text: field.unit, className: "unit" }) : "";
-    return el("label", { className: "field" }, el("span", { text: field.label }), input, unit);
+    return box;
   }
 
   /** Shows `options` in the inputs (without calling onChange). */
@@ -106,17 +83,7 @@ export class FlankForm {
 
   private edited(): void {
     const out: Record<string, unknown> = { ...this.current };
-    const bad: string[] = [];
-    for (const [key, input] of this.inputs) {
-      const value = parseFlank(key, input.value.trim());
-      if (value === undefined) {
-        input.setAttribute("aria-invalid", "true");
-        bad.push(input.closest("label")?.firstChild?.textContent ?? key);
-      } else {
-        input.removeAttribute("aria-invalid");
-        out[key] = value;
-      }
-    }
+    const bad = readFields(this.inputs, out, (key, input) => parseFlank(key, input.value.trim()));
     if (bad.length > 0) return this.onInvalid(`${bad.join(", ")}: enter ${bad.length === 1 ? "a valid value" : "valid values"} (numbers; direction as X,Y,Z; strips a whole number or empty)`);
     this.current = out as unknown as FlankFormOptions;
     this.onChange(this.current);

@@ -3,14 +3,12 @@
 // the tool body and the collisions flagged, A/C flips, the program's length and time, stage timings.
 
 import type { FlankResult } from "../lib/index";
-import { el } from "./dom";
+import { metricsTable, timingLines, type Row } from "./metrics-table";
 
 const n0 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 0 });
 const n1 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 1 });
 const n3 = new Intl.NumberFormat("en-US", { maximumSignificantDigits: 3 });
 const mm = (v: number) => `${n3.format(v)} mm`;
-
-type Row = [testId: string, label: string, value: string, warn?: boolean];
 
 /** RMS over every machined sample, from the strips' own RMS and sample counts. */
 function rms(strips: { samples: number; rms_mm: number }[]): number {
@@ -64,20 +62,5 @@ function rows(plan: FlankResult): Row[] {
 
 /** Replaces the panel's content with the metrics of a flank plan. */
 export function renderFlankMetrics(container: HTMLElement, plan: FlankResult): void {
-  const body = el("tbody");
-  for (const [testId, label, value, warn] of rows(plan)) {
-    const td = el("td", { text: value, testId });
-    if (warn) td.classList.add("warn");
-    body.append(el("tr", {}, el("th", { text: label }), td));
-  }
-  const timings = Object.entries(plan.report.timings_ms)
-    .filter(([stage]) => stage !== "total")
-    .map(([stage, ms]) => `${stage} ${n0.format(ms)}`)
-    .join(" · ");
-  const total = plan.report.timings_ms["total"] ?? plan.ms;
-  container.replaceChildren(
-    el("table", { className: "metrics-table" }, body),
-    el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(total)}` }),
-    el("p", { className: "timings", testId: "metric-memory", text: `Planner memory: ${n0.format(plan.wasmMemoryBytes / 2 ** 20)} MiB` }),
-  );
+  container.replaceChildren(metricsTable(rows(plan)), ...timingLines(plan.report.timings_ms, plan.ms, plan.wasmMemoryBytes));
 }

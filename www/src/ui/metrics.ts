@@ -3,13 +3,12 @@
 
 import type { PlanResult } from "../lib/index";
 import { el } from "./dom";
+import { metricsTable, timingLines, type Row } from "./metrics-table";
 
 const n0 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 0 });
 const n1 = new Intl.NumberFormat("en-US", { maximumFractionDigits: 1 });
 const n3 = new Intl.NumberFormat("en-US", { maximumSignificantDigits: 3 });
 const mm = (v: number) => `${n3.format(v)} mm`;
-
-type Row = [testId: string, label: string, value: string, warn?: boolean];
 
 function rows(plan: PlanResult, limit: number): Row[] {
   const { report } = plan;
@@ -89,26 +88,10 @@ function rows(plan: PlanResult, limit: number): Row[] {
 
 /** Replaces the panel's content with the metrics of `plan` (scallop limit `limit`, mm). */
 export function renderMetrics(container: HTMLElement, plan: PlanResult, limit: number): void {
-  const table = el("table", { className: "metrics-table" });
-  const body = el("tbody");
-  for (const [testId, label, value, warn] of rows(plan, limit)) {
-    const td = el("td", { text: value, testId });
-    if (warn) td.classList.add("warn");
-    body.append(el("tr", {}, el("th", { text: label }), td));
-  }
-  table.append(body);
-  const timings = Object.entries(plan.report.timings_ms)
-    .filter(([stage]) => stage !== "total")
-    .map(([stage, ms]) => `${stage} ${n0.format(ms)}`)
-    .join(" · ");
-  const total = plan.report.timings_ms["total"] ?? plan.ms;
-  const mib = plan.wasmMemoryBytes / 2 ** 20;
   container.replaceChildren(
     ...plan.report.warnings.map((text) => el("p", { className: "plan-warning", testId: "plan-warning", text: `⚠ ${text}` })),
-    table,
-    el("p", { className: "timings", testId: "metric-timings", text: `Stage timings (ms): ${timings} — total ${n0.format(total)}` }),
-    // Linear memory never shrinks: this is the planner's peak so far (big parts need watching).
-    el("p", { className: "timings", testId: "metric-memory", text: `Planner memory: ${n0.format(mib)} MiB` }),
+    metricsTable(rows(plan, limit)),
+    ...timingLines(plan.report.timings_ms, plan.ms, plan.wasmMemoryBytes),
   );
 }
 

@@ -5,6 +5,7 @@ import type { OriginOption } from "../core";
 import type { FullPlanOptions } from "../lib/defaults";
 import { originFromText, originToText } from "../options";
 import { el } from "./dom";
+import { fieldRow, readFields, type FieldInput } from "./fields";
 
 type NumberKey = "radiusMm" | "scallopMm" | "leadDeg" | "tiltDeg" | "feedMmMin" | "plungeFeedMmMin" | "spindleRpm" | "safeZMm" | "verifySamples" | "alpha";
 type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets" | "optimise";
@@ -34,7 +35,7 @@ const MACHINE: (NumberField | ChoiceField)[] = [
 ];
 
 export class OptionsForm {
-  private readonly inputs = new Map<string, HTMLInputElement | HTMLSelectElement>();
+  private readonly inputs = new Map<string, FieldInput>();
   private readonly origin: HTMLSelectElement;
   private picked: OriginOption | null = null;
   private holes = 0;
@@ -67,22 +68,8 @@ export class OptionsForm {
   }
 
   private row(field: NumberField | ChoiceField): HTMLElement {
-    let input: HTMLInputElement | HTMLSelectElement;
-    if ("choices" in field) {
-      input = el("select");
-      for (const [value, text] of field.choices) input.append(new Option(text, value));
-    } else {
-      input = el("input");
-      input.type = "text";
-      input.inputMode = "decimal";
-      input.autocomplete = "off";
-      if (field.optional) input.placeholder = "auto";
-    }
-    input.id = `opt-${field.id}`;
-    input.dataset["testid"] = `opt-${field.id}`;
+    const { row, input } = fieldRow("opt-", "optional" in field && field.optional ? { ...field, placeholder: "auto" } : field);
     this.inputs.set(field.key, input);
-    const unit = "unit" in field && field.unit !== "" ? el("span", { text: field.unit, className: "unit" }) : "";
-    const row = el("label", { className: "field" }, el("span", { text: field.label }), input, unit);
     if ("fiveAxis" in field && field.fiveAxis) row.classList.add("five-axis");
     return row;
   }
@@ -119,22 +106,12 @@ export class OptionsForm {
 
   private edited(): void {
     const out: Record<string, unknown> = { ...this.current };
-    const bad: string[] = [];
-    for (const [key, input] of this.inputs) {
+    const bad = readFields(this.inputs, out, (key, input) => {
       const text = input.value.trim();
-      let value: unknown = text;
-      if (key === "axes") value = Number(text);
-      else if (input instanceof HTMLInputElement) {
-        value = text === "" && key === "safeZMm" ? null : text !== "" && Number.isFinite(Number(text)) ? Number(text) : undefined;
-      }
-      if (value === undefined) {
-        input.setAttribute("aria-invalid", "true");
-        bad.push(input.closest("label")?.firstChild?.textContent ?? key);
-      } else {
-        input.removeAttribute("aria-invalid");
-        out[key] = value;
-      }
-    }
+      if (key === "axes") return Number(text);
+      if (!(input instanceof HTMLInputElement)) return text;
+      return text === "" && key === "safeZMm" ? null : text !== "" && Number.isFinite(Number(text)) ? Number(text) : undefined;
+    });
     const origin = originFromText(this.origin.value);
     if (origin !== null) out["origin"] = origin;
     if (bad.length > 0) return this.onInvalid(`${bad.join(", ")}: enter a number`);

@@ -33,7 +33,8 @@ export class FacesLayer {
     pick.setIndex(new THREE.BufferAttribute(drawing.triangles, 1));
     pick.computeBoundingSphere();
     this.pickMesh = new THREE.Mesh(pick, new THREE.MeshBasicMaterial({ side: THREE.DoubleSide }));
-    this.setState(new Uint8Array(this.faceCount()), new Uint8Array(this.faceCount()));
+    const faces = this.faceCount();
+    this.setState(new Uint8Array(faces), new Uint8Array(faces));
   }
 
   faceCount(): number {
