@@ -2,12 +2,13 @@
 //! the toolpath's facet queries ([`crate::mesh::nearest`]): median splits of the items'
 //! midpoints along the longest axis of their bounds (ties by id, so the tree is deterministic),
 //! down to leaves of at most [`LEAF_SIZE`] items. Each user keeps its items in leaf order and
-//! writes its own pruned traversal.
+//! prunes its own traversal: [`Walk`] visits the leaves depth first, left child first.
 //!
 //! Nodes are stored depth first: a node's left child follows it, `right` is the right child; a
 //! leaf (`count > 0`) holds the slots `start..start + count` of the leaf order.
 
 use glam::DVec3;
+use std::ops::Range;
 
 pub(crate) const LEAF_SIZE: usize = 4;
 
@@ -109,6 +110,64 @@ fn node(bounds: &[(DVec3, DVec3)], mids: &[DVec3], ids: &mut [u32], start: usize
     } else {
         node(bounds, mids, left_ids, start, index + 1, left_out);
         node(bounds, mids, right_ids, start + half, index + 1 + left_nodes, right_out);
+    }
+}
+
+/// A traversal stack without allocation. The tree is balanced (median splits), so its depth is
+/// at most 32 for any u32 face count, and a depth-first traversal keeps at most one pending
+/// sibling per level.
+pub(crate) struct Stack<T: Copy> {
+    items: [T; 64],
+    len: usize,
+}
+
+impl<T: Copy> Stack<T> {
+    pub(crate) fn new(fill: T) -> Self {
+        Self { items: [fill; 64], len: 0 }
+    }
+
+    pub(crate) fn push(&mut self, item: T) {
+        self.items[self.len] = item;
+        self.len += 1;
+    }
+
+    pub(crate) fn pop(&mut self) -> Option<T> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.items[self.len])
+    }
+}
+
+/// A depth-first walk of a tree from [`build`], left child first, that yields the slots of the
+/// leaves whose box, and no ancestor's, `prune` rejects. A node is tested when it is reached,
+/// so a bound the leaves before it have tightened applies to it.
+pub(crate) struct Walk {
+    stack: Stack<u32>,
+}
+
+impl Walk {
+    pub(crate) fn new(nodes: &[Node]) -> Self {
+        let mut stack = Stack::new(0u32);
+        if !nodes.is_empty() {
+            stack.push(0);
+        }
+        Walk { stack }
+    }
+
+    /// The next leaf's slots, `start..start + count`.
+    pub(crate) fn next_leaf(&mut self, nodes: &[Node], mut prune: impl FnMut(&Node) -> bool) -> Option<Range<usize>> {
+        while let Some(index) = self.stack.pop() {
+            let node = &nodes[index as usize];
+            if prune(node) {
+                continue;
+            }
+            if node.count == 0 {
+                self.stack.push(node.right);
+                self.stack.push(index + 1);
+                continue;
+            }
+            return Some(node.start as usize..(node.start + node.count) as usize);
+        }
+        None
     }
 }
 

@@ -383,6 +383,18 @@ fn holder_collisions_are_flagged_not_dropped() {
     assert_eq!(wide.toolpath.stats.cut_points, plausible.toolpath.stats.cut_points, "nothing is dropped");
 }
 
+/// The page's blade preset (www/src/samples.ts: the seed 002 Fig. 17 tool) and the CLI's
+/// defaults, unverified.
+fn blade_preset() -> FlankOptions {
+    FlankOptions {
+        tool: ConeTool { tip_radius_mm: 2.87, top_radius_mm: 9.56, flute_length_mm: 21.8 },
+        direction: -DVec3::Y,
+        strips: Some(11),
+        verify_samples: 0,
+        ..FlankOptions::default()
+    }
+}
+
 /// The seed 002 Fig. 17 tool on the page's blade sample (issue 35: the check flagged 3374 of
 /// its 3376 moves, a holder twice the top radius starting at the flute top, and the entry
 /// descended vertically 6.1 mm into the blade). With the default shank, gauge length and holder
@@ -391,14 +403,7 @@ fn holder_collisions_are_flagged_not_dropped() {
 #[test]
 fn blade_sample_flagged_every_move() {
     let s = surface(&fixtures::blade(58, 56), -DVec3::X);
-    // The page's blade preset (www/src/samples.ts) and the CLI's defaults.
-    let o = FlankOptions {
-        tool: ConeTool { tip_radius_mm: 2.87, top_radius_mm: 9.56, flute_length_mm: 21.8 },
-        direction: -DVec3::Y,
-        strips: Some(11),
-        verify_samples: 0,
-        ..FlankOptions::default()
-    };
+    let o = blade_preset();
     let p = plan(&s, &o);
     let c = &p.report.collisions;
     assert!(c.checked_moves > 3000 && c.checked_moves == p.toolpath.moves.len(), "{}", c.checked_moves);
@@ -428,14 +433,7 @@ fn blade_sample_flagged_every_move() {
 #[test]
 fn blade_short_gauge_and_wide_shank_are_flagged() {
     let s = surface(&fixtures::blade(58, 56), -DVec3::X);
-    let o = FlankOptions {
-        tool: ConeTool { tip_radius_mm: 2.87, top_radius_mm: 9.56, flute_length_mm: 21.8 },
-        direction: -DVec3::Y,
-        strips: Some(11),
-        pose_step_mm: Some(341.1 / 19.0),
-        verify_samples: 0,
-        ..FlankOptions::default()
-    };
+    let o = FlankOptions { pose_step_mm: Some(341.1 / 19.0), ..blade_preset() };
     for (name, options, what, deeper_than) in [
         ("gauge 30 mm", FlankOptions { gauge_length_mm: Some(30.0), ..o.clone() }, "holder", -5.0),
         ("shank radius 10.5 mm", FlankOptions { shank_radius_mm: Some(10.5), ..o.clone() }, "shank", -0.9),

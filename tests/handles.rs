@@ -6,37 +6,11 @@
 use glam::DVec3;
 use slitpath::fixtures::{
     self,
-    handles::{HANDLE_EDGE_MM, PLATE_BRIDGE},
+    handles::{torus, HANDLE_EDGE_MM, PLATE_BRIDGE},
 };
-use slitpath::mesh::{self, geometry, handles, topology, MeshError, MeshOptions, TriMesh};
+use slitpath::mesh::{self, geometry, handles, topology, MeshError, MeshOptions};
 use slitpath::plan::{PlanOptions, Planner};
-use std::f64::consts::{PI, TAU};
-
-/// A torus of major radius `big` and minor radius `small` with `n × m` quads (n round the axis,
-/// m round the tube); the first `drop` triangles removed make it open.
-fn torus(big: f64, small: f64, n: u32, m: u32, drop: usize) -> TriMesh {
-    let mut positions = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (i as f64 / n as f64 * TAU, j as f64 / m as f64 * TAU);
-            positions.push(DVec3::new(
-                (big + small * v.cos()) * u.cos(),
-                (big + small * v.cos()) * u.sin(),
-                small * v.sin(),
-            ));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    triangles.drain(..drop);
-    TriMesh { positions, triangles }
-}
+use std::f64::consts::PI;
 
 /// Length of a regular `k`-gon inscribed in a circle of radius `r`.
 fn polygon(r: f64, k: u32) -> f64 {

@@ -30,25 +30,10 @@ fn cube() -> TriMesh {
     TriMesh { positions: p, triangles }
 }
 
-/// A torus with `n×m` quads; `drop` faces removed make it an open surface of genus 1.
+/// A torus (major radius 3, minor 1) with `n×m` quads; `drop` faces removed make it an open
+/// surface of genus 1.
 fn torus(n: u32, m: u32, drop: usize) -> TriMesh {
-    let mut positions = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (i as f64 / n as f64 * std::f64::consts::TAU, j as f64 / m as f64 * std::f64::consts::TAU);
-            positions.push(DVec3::new((3.0 + v.cos()) * u.cos(), (3.0 + v.cos()) * u.sin(), v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    triangles.drain(..drop);
-    TriMesh { positions, triangles }
+    fixtures::handles::torus(3.0, 1.0, n, m, drop)
 }
 
 #[test]

@@ -13,7 +13,8 @@
 //! parts of the tool (the flutes below a shank, the shank below a holder), checked by their own
 //! slabs. Deterministic: ties go to the first face met in the tree's fixed order.
 
-use super::nearest::{FaceTree, Stack};
+use super::nearest::FaceTree;
+use crate::bvh::{Node, Walk};
 use glam::{DVec2, DVec3};
 
 /// The facet point nearest to an axis within a slab ([`FaceTree::nearest_to_axis`]).
@@ -46,24 +47,12 @@ impl FaceTree {
         let half = 0.5 * (slab.to - slab.from);
         let mut best: Option<AxialNearest> = None;
         let mut bound = limit;
-        let mut stack = Stack::new(0u32);
-        if !self.nodes.is_empty() {
-            stack.push(0);
-        }
-        while let Some(index) = stack.pop() {
-            let node = &self.nodes[index as usize];
-            // A box farther than bound + half from the segment's midpoint is farther than the
-            // bound from the segment, and so from the axis within the slab.
-            let reach = bound + half;
-            if node.distance2(mid) > reach * reach {
-                continue;
-            }
-            if node.count == 0 {
-                stack.push(node.right);
-                stack.push(index + 1);
-                continue;
-            }
-            for slot in node.start as usize..(node.start + node.count) as usize {
+        let mut walk = Walk::new(&self.nodes);
+        // A box farther than bound + half from the segment's midpoint is farther than the bound
+        // from the segment, and so from the axis within the slab.
+        let far = |node: &Node, bound: f64| node.distance2(mid) > (bound + half) * (bound + half);
+        while let Some(slots) = walk.next_leaf(&self.nodes, |node| far(node, bound)) {
+            for slot in slots {
                 let (m, r) = self.spheres[slot];
                 let t = (m - slab.origin).dot(slab.axis);
                 // The face's bounding sphere misses the slab, or lies beyond the bound.

@@ -9,7 +9,7 @@
 //! by its plane and its bounding sphere before its closest point. Deterministic: the same mesh
 //! builds the same tree, and ties between faces at equal distance go to the lower face index.
 
-use crate::bvh::{self, Node};
+use crate::bvh::{self, Node, Stack, Walk};
 use crate::num;
 use glam::DVec3;
 
@@ -90,21 +90,9 @@ impl FaceTree {
     /// stopping at the first such facet.
     pub fn point_nearer_than(&self, p: DVec3, limit: f64) -> bool {
         let limit2 = limit * limit;
-        let mut stack = Stack::new(0u32);
-        if !self.nodes.is_empty() {
-            stack.push(0);
-        }
-        while let Some(index) = stack.pop() {
-            let node = &self.nodes[index as usize];
-            if node.distance2(p) > limit2 {
-                continue;
-            }
-            if node.count == 0 {
-                stack.push(node.right);
-                stack.push(index + 1);
-                continue;
-            }
-            for slot in node.start as usize..(node.start + node.count) as usize {
+        let mut walk = Walk::new(&self.nodes);
+        while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(p) > limit2) {
+            for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let d = n.dot(p) - offset;
                 if d * d >= limit2 {
@@ -133,21 +121,9 @@ impl FaceTree {
         let half = 0.5 * a.distance(b);
         let reach = limit + half;
         let (limit2, reach2) = (limit * limit, reach * reach);
-        let mut stack = Stack::new(0u32);
-        if !self.nodes.is_empty() {
-            stack.push(0);
-        }
-        while let Some(index) = stack.pop() {
-            let node = &self.nodes[index as usize];
-            if node.distance2(mid) > reach2 {
-                continue;
-            }
-            if node.count == 0 {
-                stack.push(node.right);
-                stack.push(index + 1);
-                continue;
-            }
-            for slot in node.start as usize..(node.start + node.count) as usize {
+        let mut walk = Walk::new(&self.nodes);
+        while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(mid) > reach2) {
+            for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
                 // Both ends on one side of the plane and beyond the limit: the face too.
@@ -317,30 +293,6 @@ impl FaceTree {
         let [a, b, c] = self.corners[slot];
         let bary = closest_on_triangle(p, a, b, c);
         (bary, a * bary[0] + b * bary[1] + c * bary[2])
-    }
-}
-
-/// A traversal stack without allocation. The tree is balanced (median splits), so its depth is
-/// at most 32 for any u32 face count, and a depth-first traversal keeps at most one pending
-/// sibling per level.
-pub(super) struct Stack<T: Copy> {
-    items: [T; 64],
-    len: usize,
-}
-
-impl<T: Copy> Stack<T> {
-    pub(super) fn new(fill: T) -> Self {
-        Self { items: [fill; 64], len: 0 }
-    }
-
-    pub(super) fn push(&mut self, item: T) {
-        self.items[self.len] = item;
-        self.len += 1;
-    }
-
-    pub(super) fn pop(&mut self) -> Option<T> {
-        self.len = self.len.checked_sub(1)?;
-        Some(self.items[self.len])
     }
 }
 

@@ -259,53 +259,75 @@ fn split_pinches(mesh: &TriMesh, neighbour: &[u32]) -> (Vec<[u32; 3]>, Vec<DVec3
         if faces.len() < 2 {
             continue;
         }
-        // Fans: flood fill among the vertex's faces through edges that contain the vertex.
-        fan.clear();
-        fan.resize(faces.len(), NONE);
-        let mut n_fans = 0;
-        for s in 0..faces.len() {
-            if fan[s] != NONE {
-                continue;
-            }
-            fan[s] = n_fans;
-            let mut stack = vec![s];
-            while let Some(i) = stack.pop() {
-                let f = faces[i] as usize;
-                let t = mesh.triangles[f];
-                for k in 0..3 {
-                    if t[k] as usize != v && t[(k + 1) % 3] as usize != v {
-                        continue;
-                    }
-                    let g = neighbour[3 * f + k];
-                    if g == NONE {
-                        continue;
-                    }
-                    if let Some(j) = faces.iter().position(|&h| h == g) {
-                        if fan[j] == NONE {
-                            fan[j] = n_fans;
-                            stack.push(j);
-                        }
+        let across = |f: u32, k: usize, _| Some(neighbour[3 * f as usize + k]).filter(|&g| g != NONE);
+        split += split_fans(v as u32, faces, &mesh.triangles, &mut triangles, &mut fan, across, || {
+            positions.push(mesh.positions[v]);
+            positions.len() as u32 - 1
+        });
+    }
+    (triangles, positions, split as usize)
+}
+
+/// Splits vertex `v` into one vertex per fan of its faces (`faces`, from [`vertex_faces`] of
+/// `triangles`): two faces are in one fan when joined through edges at `v` that
+/// `across(face, k, w)` crosses into a face (edge k of the face runs t\[k\] → t\[k + 1\], w is
+/// its other end; `None`: a boundary, or a barrier such as a cut). The fan of the lowest face
+/// keeps `v`; `copy()` makes the vertex of each other fan (in order of their first face), and
+/// it replaces `v` in those faces of `out`. `fan` is scratch. Returns the number of copies.
+pub(crate) fn split_fans(
+    v: u32,
+    faces: &[u32],
+    triangles: &[[u32; 3]],
+    out: &mut [[u32; 3]],
+    fan: &mut Vec<u32>,
+    across: impl Fn(u32, usize, u32) -> Option<u32>,
+    mut copy: impl FnMut() -> u32,
+) -> u32 {
+    // Fans: flood fill among the vertex's faces through edges that contain the vertex.
+    fan.clear();
+    fan.resize(faces.len(), NONE);
+    let mut n_fans = 0;
+    for s in 0..faces.len() {
+        if fan[s] != NONE {
+            continue;
+        }
+        fan[s] = n_fans;
+        let mut stack = vec![s];
+        while let Some(i) = stack.pop() {
+            let f = faces[i];
+            let t = triangles[f as usize];
+            for k in 0..3 {
+                let w = if t[k] == v {
+                    t[(k + 1) % 3]
+                } else if t[(k + 1) % 3] == v {
+                    t[k]
+                } else {
+                    continue;
+                };
+                let Some(g) = across(f, k, w) else { continue };
+                if let Some(j) = faces.iter().position(|&h| h == g) {
+                    if fan[j] == NONE {
+                        fan[j] = n_fans;
+                        stack.push(j);
                     }
                 }
             }
-            n_fans += 1;
         }
-        for extra in 1..n_fans {
-            let copy = positions.len() as u32;
-            positions.push(mesh.positions[v]);
-            split += 1;
-            for (i, &f) in faces.iter().enumerate() {
-                if fan[i] == extra {
-                    for c in &mut triangles[f as usize] {
-                        if *c as usize == v {
-                            *c = copy;
-                        }
+        n_fans += 1;
+    }
+    for extra in 1..n_fans {
+        let c = copy();
+        for (i, &f) in faces.iter().enumerate() {
+            if fan[i] == extra {
+                for x in &mut out[f as usize] {
+                    if *x == v {
+                        *x = c;
                     }
                 }
             }
         }
     }
-    (triangles, positions, split)
+    n_fans.saturating_sub(1)
 }
 
 /// Boundary loops with the faces on their left, each starting at its lowest vertex. `triangles`
@@ -322,9 +344,15 @@ fn boundary_loops(triangles: &[[u32; 3]], neighbour: &[u32], flipped: &[bool], n
             }
         }
     }
+    follow_loops(&next)
+}
+
+/// The loops of the successor map `next` (`NONE`: no boundary edge starts there), each from its
+/// lowest vertex, in order of it.
+pub(crate) fn follow_loops(next: &[u32]) -> Vec<Vec<u32>> {
     let mut loops = Vec::new();
-    let mut seen = vec![false; nv];
-    for s in 0..nv {
+    let mut seen = vec![false; next.len()];
+    for s in 0..next.len() {
         if next[s] == NONE || seen[s] {
             continue;
         }
@@ -340,7 +368,8 @@ fn boundary_loops(triangles: &[[u32; 3]], neighbour: &[u32], flipped: &[bool], n
     loops
 }
 
-fn loop_length(positions: &[DVec3], l: &[u32]) -> f64 {
+/// Length of the closed polyline through `l`, mm.
+pub(crate) fn loop_length(positions: &[DVec3], l: &[u32]) -> f64 {
     (0..l.len()).map(|i| positions[l[i] as usize].distance(positions[l[(i + 1) % l.len()] as usize])).sum()
 }
 

@@ -197,7 +197,8 @@ pub fn cut_handles(surface: &Surface, options: &HandleOptions) -> Result<(Surfac
     let mut s = surface.clone();
     let mut cuts = Vec::new();
     for handle in 0..genus as usize {
-        let g = s.genus();
+        // Each cut below is checked to lower the genus by exactly one.
+        let g = genus - handle as i64;
         let graph = Graph::new(&s);
         let signature = graph.signatures(&s, g).map_err(|found| HandleError::Decomposition {
             handle,
@@ -209,7 +210,7 @@ pub fn cut_handles(surface: &Surface, options: &HandleOptions) -> Result<(Surfac
         let (shortest, found) = search.shortest(options).ok_or(HandleError::NoLoop { handle, genus })?;
         let mut placed = place(&mut search, shortest.clone(), found, options.neck_ratio);
         let mut cut = cut_along(&s, &graph, &placed.cycle, handle);
-        if !cut.as_ref().is_ok_and(|c| c.surface.genus() == g - 1) && placed.cycle != shortest {
+        if !cut.as_ref().is_ok_and(|c| c.genus == g - 1) && placed.cycle != shortest {
             // The placed loop is of the shortest one's class, so cutting it should not fail
             // where cutting that one does not; were it to, the shortest one is cut instead.
             placed = Candidate { cycle: shortest, found, depth_mm: 0.0, crossing: false };
@@ -223,15 +224,14 @@ pub fn cut_handles(surface: &Surface, options: &HandleOptions) -> Result<(Surfac
             other.crossing = true;
             if other.elongation() < placed.elongation() {
                 if let Ok(c) = cut_along(&s, &graph, &other.cycle, handle) {
-                    if c.surface.genus() == g - 1 {
+                    if c.genus == g - 1 {
                         (placed, cut) = (other, c);
                     }
                 }
             }
         }
         let Candidate { cycle, depth_mm, crossing, .. } = placed;
-        let cut = cut.surface;
-        let genus_after = cut.genus();
+        let (genus_after, cut) = (cut.genus, cut.surface);
         if genus_after != g - 1 {
             return Err(HandleError::Check { handle, genus: genus_after, expected: g - 1, loops: cut.loops.len() });
         }
