@@ -430,6 +430,17 @@ fn reruns_are_identical() {
     assert_ne!(a.mean_scallop_mm, c.mean_scallop_mm);
 }
 
+#[test]
+fn without_the_vertex_probes_the_figures_are_the_same() {
+    let (surface, passes) = freeform_case();
+    let options = VerifyOptions { samples: 30_000, ..VerifyOptions::default() };
+    let all = verify(&surface, &passes, &options).unwrap();
+    let some = verify(&surface, &passes, &VerifyOptions { vertex_scallop: false, ..options }).unwrap();
+    assert_eq!(all.vertex_scallop_mm.len(), surface.positions.len());
+    assert!(some.vertex_scallop_mm.is_empty() && some.vertex_uncovered.is_empty());
+    assert_eq!(Verification { vertex_scallop_mm: Vec::new(), vertex_uncovered: Vec::new(), ..all.clone() }, some);
+}
+
 /// A V-groove along the y axis, its two flanks rising at `half_deg` from z = 0 towards the tool,
 /// triangulated on a 2 mm grid over [−10, 10]²: the vertex normals on the groove's floor are the
 /// bisector, tilted `half_deg` from both flanks' facets.

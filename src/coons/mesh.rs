@@ -68,7 +68,6 @@ pub fn grid_surface(c: &Compound, tol: f64) -> Result<(Surface, usize, f64), Coo
             let p = c.patch(i, j);
             let (a, b) = (ns[i], nt[j]);
             let base = positions.len() as u32;
-            let mut normal_ok = 0.0;
             for q in 0..=b {
                 for r in 0..=a {
                     positions.push(p.raw(r as f64 / a as f64, q as f64 / b as f64).x);
@@ -91,8 +90,7 @@ pub fn grid_surface(c: &Compound, tol: f64) -> Result<(Surface, usize, f64), Coo
             let e = p.raw(0.5, 0.5);
             let t = triangles[triangles.len() - a * b];
             let [x, y, z] = t.map(|k| positions[k as usize]);
-            normal_ok += (y - x).cross(z - x).dot(e.n);
-            if normal_ok < 0.0 {
+            if (y - x).cross(z - x).dot(e.n) < 0.0 {
                 let k0 = triangles.len() - 2 * a * b;
                 for t in &mut triangles[k0..] {
                     t.swap(1, 2);

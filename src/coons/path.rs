@@ -201,14 +201,6 @@ pub struct PathPoint {
     pub face: u64,
 }
 
-/// Distance from `p` to the segment `a`–`b`.
-fn off_chord(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let d = b - a;
-    let l2 = d.length_squared();
-    let s = if l2 > 0.0 { ((p - a).dot(d) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (p - (a + d * s)).length()
-}
-
 /// The densified path along `lines` (see the module docs).
 pub fn densify(c: &Compound, warp: &Warp, lines: &[Line], radius: f64, chord_mm: f64) -> Vec<PathPoint> {
     let mut out: Vec<PathPoint> = Vec::new();
@@ -241,18 +233,18 @@ pub fn densify(c: &Compound, warp: &Warp, lines: &[Line], radius: f64, chord_mm:
                 let e = patch.eval(s.clamp(0.0, 1.0), t.clamp(0.0, 1.0));
                 PathPoint { x: e.x, n: e.n, u: q.x + (k as f64) * c.around as f64, v: q.y, face: patch.id }
             };
-            let pa = eval(w[0]);
-            if out.last().map_or(true, |l| (l.x - pa.x).length() > 1e-9) {
-                out.push(pa);
+            let (mut fa, mut a) = (w[0], eval(w[0]));
+            if out.last().map_or(true, |l| (l.x - a.x).length() > 1e-9) {
+                out.push(a);
             }
             // At least four pieces per face crossing, then bisection to the tolerances.
             let pieces = 4;
-            for p in 0..pieces {
-                let fa = w[0] + (w[1] - w[0]) * p as f64 / pieces as f64;
-                let fb = w[0] + (w[1] - w[0]) * (p + 1) as f64 / pieces as f64;
-                let (a, b) = (eval(fa), eval(fb));
+            for p in 1..=pieces {
+                let fb = w[0] + (w[1] - w[0]) * p as f64 / pieces as f64;
+                let b = eval(fb);
                 bisect(&eval, fa, a, fb, b, radius, chord_mm, 0, &mut out);
                 out.push(b);
+                (fa, a) = (fb, b);
             }
         }
     }
@@ -274,6 +266,7 @@ fn bisect(
     let fm = 0.5 * (fa + fb);
     let m = eval(fm);
     let centre = |p: &PathPoint| p.x + p.n * radius;
+    let off_chord = |p: DVec3, a: DVec3, b: DVec3| crate::spacing::segment_dist2(p, a, b).sqrt();
     let off = off_chord(m.x, a.x, b.x).max(off_chord(centre(&m), centre(&a), centre(&b)));
     if depth < 24 && off > tol {
         bisect(eval, fa, a, fm, m, radius, tol, depth + 1, out);

@@ -23,11 +23,11 @@
 //! (nearest-rank percentiles), seed 000's uniformity index V_max (eq. 23: the variance of the
 //! per-cell maximum scallop over a 3D grid of cells), gouges, uncovered samples, CT² = Σ CT² ·
 //! (area per sample) and max CT, retractions (passes − 1), and the scallop at every surface
-//! vertex for the page's heat map. [`path_metrics`] gives the path's own figures: length, turning
-//! angles, seed 003's smoothness ρ² (eq. 33), time at a feed. With exact facets, the samples
-//! over which every ball touching the facets round them leaves more than a given height (facet
-//! valleys, [`VerifyOptions::valley_lift_mm`]; `reach`) are reported apart: their area, and
-//! the largest scallop outside them.
+//! vertex for the page's heat map ([`VerifyOptions::vertex_scallop`]). [`path_metrics`] gives
+//! the path's own figures: length, turning angles, seed 003's smoothness ρ² (eq. 33), time at a
+//! feed. With exact facets, the samples over which every ball touching the facets round them
+//! leaves more than a given height (facet valleys, [`VerifyOptions::valley_lift_mm`]; `reach`)
+//! are reported apart: their area, and the largest scallop outside them.
 //!
 //! # Preconditions
 //! A surface from [`crate::mesh`] (unit vertex normals towards the tool, face areas); finite ball
@@ -85,6 +85,10 @@ pub struct VerifyOptions {
     /// deviation from the smooth surface): the balls that stand for a valley's reach may too
     /// (their centres kept R less this from the facets). Default 0. In [0, R).
     pub valley_dip_mm: f64,
+    /// Probe every surface vertex too, for the heat map ([`Verification::vertex_scallop_mm`],
+    /// `vertex_uncovered`). Default true; false leaves both empty (a caller that shows no heat
+    /// map saves the probes: the Coons strategy's fine grid has more vertices than samples).
+    pub vertex_scallop: bool,
 }
 
 impl Default for VerifyOptions {
@@ -99,6 +103,7 @@ impl Default for VerifyOptions {
             max_scallop_search_mm: None,
             valley_lift_mm: None,
             valley_dip_mm: 0.0,
+            vertex_scallop: true,
         }
     }
 }
@@ -141,7 +146,8 @@ pub struct Verification {
     /// Capsules swept (segments, plus one per single-centre pass).
     pub segments: usize,
     /// Scallop at each surface vertex (along its vertex normal); the search height where
-    /// `vertex_uncovered` is set. Not serialised (the page takes it as a typed array).
+    /// `vertex_uncovered` is set. Not serialised (the page takes it as a typed array). Empty
+    /// unless [`VerifyOptions::vertex_scallop`].
     #[serde(skip)]
     pub vertex_scallop_mm: Vec<f64>,
     #[serde(skip)]
@@ -356,7 +362,13 @@ fn verify_on(
             let f = sample_figures(surface, &samples, &probes, cell, options.gouge_tolerance_mm, valleys.as_deref());
             (f, valleys.map_or(0, |v| v.iter().filter(|&&x| x).count()))
         },
-        || probe_all(&volume, surface.positions.len(), vertex, h, search),
+        || {
+            if options.vertex_scallop {
+                probe_all(&volume, surface.positions.len(), vertex, h, search)
+            } else {
+                Vec::new()
+            }
+        },
     );
     let n = samples.len();
     let vertex_scallop_mm = vertex_probes.iter().map(|p| p.scallop.unwrap_or(search)).collect();
