@@ -2,7 +2,9 @@
 // bundled STEP sample (seed 004's blade band) read in the worker, its faces listed and drawn,
 // planned with the Coons band spiral; a face clicked in the 3D view leaves the band (a typed
 // error with the way out) and clicked again closes it; the download is byte-identical to
-// `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on.
+// `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on;
+// the ball-end spiral refuses the band's walls (undercuts for a 3-axis tool) and plans a block of
+// faces picked from a grid of B-spline faces, the same program as `slitpath plan --faces`.
 // The tests share one page and run in order.
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
@@ -101,5 +103,38 @@ describe("STEP input on the page", { concurrency: false }, () => {
     assert.equal(await page.getByTestId("download-gcode").isEnabled(), true);
     const state = await replan(() => page.getByTestId("opt-coons-samples").fill("10000").then(() => page.getByTestId("opt-coons-samples").dispatchEvent("change")));
     assert.equal(state, "planned", "the page plans again");
+  });
+
+  it("plans a selection of STEP faces with the ball-end spiral, the same program as `slitpath plan --faces`", async () => {
+    // The blade band's walls face sideways: a clear error, not a plan.
+    const walls = await replan(() => page.getByTestId("opt-strategy").selectOption("spiral"));
+    assert.match(walls, /^error: .*undercut/);
+    const file = join(output, "field_grid.step");
+    cli("fixture", "step:field_grid", "-o", file);
+    assert.equal(await replan(() => page.getByTestId("stl-input").setInputFiles(file)), "planned", await page.getByTestId("status-detail").textContent());
+    assert.equal((await ticked()).length, 20, "all twenty faces listed and selected");
+    const all = await metric("metric-length");
+    // A 2 × 3 block of the grid, ticked in one go (one re-plan).
+    const block = [50, 91, 132, 254, 287, 320];
+    const state = await replan(() =>
+      page.evaluate((ids) => {
+        document.querySelector("[data-testid=faces-none]").click();
+        for (const id of ids) document.querySelector(`[data-testid=face-${id}]`).click();
+      }, block),
+    );
+    assert.equal(state, "planned", await page.getByTestId("status-detail").textContent());
+    assert.deepEqual(await ticked(), block);
+    assert.notEqual(await metric("metric-length"), all, "the block plans a path of its own");
+    const command = await page.getByTestId("cli-command").textContent();
+    assert.match(command, /^slitpath plan PART\.step --faces 50,91,132,254,287,320 /);
+    const [download] = await Promise.all([page.waitForEvent("download"), page.getByTestId("download-gcode").click()]);
+    assert.equal(download.suggestedFilename(), "field_grid.ngc");
+    const fromPageFile = join(output, "page-field_grid.ngc");
+    await download.saveAs(fromPageFile);
+    const cliFile = join(output, "cli-field_grid.ngc");
+    cli("plan", file, ...command.split(" ").slice(3), "-o", cliFile);
+    const [fromPage, fromCli] = [readFileSync(fromPageFile), readFileSync(cliFile)];
+    assert.ok(fromCli.length > 10_000, "the CLI wrote a program");
+    assert.ok(fromPage.equals(fromCli), `page ${fromPage.length} bytes, CLI ${fromCli.length} bytes: they differ`);
   });
 });
