@@ -13,9 +13,9 @@
 //! lower by the lift the spacing plans for a ball touching there (see `Spacer::lift_mm`).
 //!
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
-//! its top: on every edge crossing the band and on [`CROSSINGS`] − 1 lines arg w = const across
-//! each of its faces, the cusp itself is located (where the two rings are equally far) and tested too
-//! ([`Cutter::add_cusps`]). Issue 34's sweep found the finish at 1.02–1.33 h on 11 of 200 coarse
+//! its top: on every edge crossing the band and on lines arg w = const across each of its faces
+//! (at least [`CROSSINGS`] − 1, more on coarse faces), the cusp itself is located (where the two
+//! rings are equally far) and tested too ([`Cutter::add_cusps`]). Issue 34's sweep found the finish at 1.02–1.33 h on 11 of 200 coarse
 //! generated parts between the fixed points, beside creases and round the corners of the outer
 //! loop, which the map squeezes into a face or two.
 
@@ -206,10 +206,10 @@ impl<'a> Gate<'a> {
         }
     }
 
-    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, [`CROSSINGS`] − 1 of
-    /// them evenly over its angular extent, with their cusps ([`Cutter::add_cusps`]): the
-    /// ring pair's cusp inside a face, where the rings bend most (round the corner of an outer
-    /// loop the map squeezes into one face), lies between the face's edges.
+    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, evenly over its angular
+    /// extent (see [`CROSSINGS`]), with their cusps ([`Cutter::add_cusps`]): the ring pair's
+    /// cusp inside a face, where the rings bend most (round the corner of an outer loop the map
+    /// squeezes into one face), lies between the face's edges.
     fn face_crossings(&self, f: usize, lo: f64, hi: f64, cutter: &Cutter<'_>, out: &mut Vec<GatePoint>) {
         let (r0, r1) = self.rho_range[f];
         if !(r1 > lo && r0 < hi) {
@@ -220,8 +220,11 @@ impl<'a> Gate<'a> {
         if !(x1 > x0) {
             return;
         }
-        for k in 1..CROSSINGS {
-            let x = x0 + (x1 - x0) * k as f64 / CROSSINGS as f64;
+        let t = self.surface.triangles[f].map(|v| self.surface.positions[v as usize]);
+        let longest = t[0].distance(t[1]).max(t[1].distance(t[2])).max(t[2].distance(t[0]));
+        let pieces = ((longest / (CROSSING_STEP * self.radius_mm)).ceil() as usize).clamp(CROSSINGS, MAX_CROSSINGS);
+        for k in 1..pieces {
+            let x = x0 + (x1 - x0) * k as f64 / pieces as f64;
             let Some([a, b]) = self.chord(f, x, |w| w.x) else { continue };
             let (u0, u1) = clip(a.2.y, b.2.y, lo, hi);
             if u1 > u0 {
@@ -264,11 +267,18 @@ impl<'a> Gate<'a> {
     }
 }
 
-/// Lines across each face of a band are `1/CROSSINGS` of its angular extent apart. Each is only
-/// searched for its cusp: gen104 of the sweep (a delaunay mesh, normals tilted by 30°) keeps
-/// 0.96 h on 10⁶ samples with 4 (1.29 h with 4 lines of fixed points besides), and 8 took the
-/// 40k panel's spacing from 1.5 to 2.6 s.
+/// Lines across each face of a band split its angular extent into at least `CROSSINGS` pieces,
+/// and into pieces at most [`CROSSING_STEP`]·R wide on coarse faces (by the face's longest
+/// edge). Each is only searched for its cusp. A fixed 4 per face kept gen104 of the sweep (a
+/// delaunay mesh, normals tilted by 30°) at 0.96 h on 10⁶ samples, but left 8 of 200 sweep parts
+/// (3k–12k faces) at 1.04–1.37 h on fresh samples; 8 per face took five of them under h, and the
+/// 40k panel's spacing from 1.5 to 2.6 s, where its faces are a third of R across.
 const CROSSINGS: usize = 4;
+/// See [`CROSSINGS`]: a twelfth of R gives the sweep's coarse faces (about 0.7 R across) eight
+/// pieces and the 40k panel's (0.33 R) four.
+const CROSSING_STEP: f64 = 1.0 / 12.0;
+/// At most this many pieces per face (a long sliver).
+const MAX_CROSSINGS: usize = 24;
 
 /// Segments searched on each side of a point's angle for the distances that locate a cusp: the
 /// nearest centres of a point between two rings lie on its own meridian.
