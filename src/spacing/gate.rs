@@ -19,6 +19,7 @@
 //! generated parts between the fixed points, beside creases and round the corners of the outer
 //! loop, which the map squeezes into a face or two.
 
+use super::Segment;
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
 use crate::num;
@@ -282,7 +283,7 @@ const MAX_CROSSINGS: usize = 24;
 
 /// Segments searched on each side of a point's angle for the distances that locate a cusp: the
 /// nearest centres of a point between two rings lie on its own meridian.
-const CUSP_SEGMENTS: isize = 3;
+const CUSP_SEGMENTS: usize = 3;
 
 /// Regula falsi steps locating a cusp along an edge ([`Cutter::add_cusps`]).
 const CUSP_STEPS: usize = 4;
@@ -416,32 +417,39 @@ fn clip(ra: f64, rb: f64, lo: f64, hi: f64) -> (f64, f64) {
     (u_lo.min(u_hi).max(0.0), u_lo.max(u_hi).min(1.0))
 }
 
-/// A ring's ball-centre polyline with the angle of each centre (ascending over [0, 2π]).
+/// A ring's ball-centre polyline with the angle of each centre (ascending over [0, 2π]) and
+/// its segments (see [`Segment`]).
 #[derive(Debug, Clone)]
 pub(super) struct RingLine {
     rho: f64,
     theta: Vec<f64>,
     centres: Vec<DVec3>,
+    /// Segment k joins centres k and k + 1.
+    segments: Vec<Segment>,
 }
 
 impl RingLine {
     pub(super) fn new(rho: f64) -> Self {
-        Self { rho, theta: Vec::new(), centres: Vec::new() }
+        Self { rho, theta: Vec::new(), centres: Vec::new(), segments: Vec::new() }
     }
 
     pub(super) fn push(&mut self, theta: f64, centre: DVec3) {
-        if self.centres.last() != Some(&centre) {
-            self.theta.push(theta);
-            self.centres.push(centre);
+        if let Some(&last) = self.centres.last() {
+            if last == centre {
+                return;
+            }
+            self.segments.push(Segment::new(last, centre));
         }
+        self.theta.push(theta);
+        self.centres.push(centre);
     }
 
     /// Whether a segment within [`LOCAL_SEGMENTS`] of angle `theta` lies within `r` of `q`:
     /// the fast answer for a point of a band, whose nearest centres are almost always on its
     /// own meridian. `false` is not conclusive.
     fn near_theta_within(&self, q: DVec3, theta: f64, r: f64) -> bool {
-        match self.segments_near(theta, LOCAL_SEGMENTS) {
-            Some(mut segments) => segments.any(|(a, b)| super::segment_dist2(q, a, b) <= r * r),
+        match self.find_near(theta, LOCAL_SEGMENTS, |s| s.dist2(q) <= r * r) {
+            Some(found) => found,
             None => self.centres.first().is_some_and(|c| c.distance_squared(q) <= r * r),
         }
     }
@@ -449,34 +457,42 @@ impl RingLine {
     /// The squared distance from `q` to the segments within `window` of angle `theta`: the
     /// distance to the ring where its nearest centres are on the point's own meridian, as they
     /// almost always are (else an overestimate).
-    fn near_dist2(&self, q: DVec3, theta: f64, window: isize) -> f64 {
-        match self.segments_near(theta, window) {
-            Some(segments) => segments.map(|(a, b)| super::segment_dist2(q, a, b)).fold(f64::INFINITY, num::min),
+    fn near_dist2(&self, q: DVec3, theta: f64, window: usize) -> f64 {
+        let mut best = f64::INFINITY;
+        let found = self.find_near(theta, window, |s| {
+            best = num::min(best, s.dist2(q));
+            false
+        });
+        match found {
+            Some(_) => best,
             None => self.centres.first().map_or(f64::INFINITY, |c| c.distance_squared(q)),
         }
     }
 
-    /// The segments within `window` of angle `theta`, outwards from it (where the nearest
-    /// almost always is); `None` for a ring of fewer than two centres.
-    fn segments_near(&self, theta: f64, window: isize) -> Option<impl Iterator<Item = (DVec3, DVec3)> + '_> {
+    /// Calls `f` on the segments within `window` of angle `theta`, outwards from it (where the
+    /// nearest almost always is: its own, then one before and one after, …) until it returns
+    /// `true`; whether it did. `None` for a ring of fewer than two centres.
+    #[inline]
+    fn find_near(&self, theta: f64, window: usize, mut f: impl FnMut(&Segment) -> bool) -> Option<bool> {
         let n = self.centres.len();
         if n < 2 {
             return None;
         }
         let t = crate::num::rem_tau(theta);
         let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
+        let m = self.segments.len();
+        if i >= window && i + window < m {
+            let s = &self.segments[i - window..=i + window];
+            return Some(f(&s[window]) || (1..=window).any(|d| f(&s[window - d]) || f(&s[window + d])));
+        }
         // The ring closes: centre n − 1 is centre 0, so segments wrap modulo n − 1.
-        let m = (n - 1) as isize;
-        Some((0..=2 * window).map(move |k| {
-            let offset = if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 };
-            let j = (i as isize + offset).rem_euclid(m) as usize;
-            (self.centres[j], self.centres[j + 1])
-        }))
+        let at = |offset: isize| &self.segments[(i as isize + offset).rem_euclid(m as isize) as usize];
+        Some(f(at(0)) || (1..=window as isize).any(|d| f(at(-d)) || f(at(d))))
     }
 }
 
 /// Segments searched on each side of a point's angle before the rings are searched whole.
-const LOCAL_SEGMENTS: isize = 8;
+const LOCAL_SEGMENTS: usize = 8;
 
 /// Points the local search does not settle that are tested against every segment, before a grid
 /// is built for the rest: on the 40k panel a cutter met 2.6 such points on average, and building
@@ -555,22 +571,29 @@ impl<'r> Cutter<'r> {
         };
         // The points of `line` are the middles of `count` equal pieces; with the two ends (on
         // the band's rings where the edge crosses it whole) they bracket every cusp.
-        let us: Vec<f64> =
-            std::iter::once(0.0).chain((0..count).map(|i| (i as f64 + 0.5) / count as f64)).chain([1.0]).collect();
-        let laid = |i: usize| if i == 0 || i > count { at(us[i]) } else { out[first + i - 1] };
-        let sides: Vec<Option<f64>> = (0..us.len()).map(|i| self.side(&laid(i))).collect();
-        for i in 0..us.len() - 1 {
-            let (Some(mut fa), Some(mut fb)) = (sides[i], sides[i + 1]) else { continue };
+        let u_of = |i: usize| match i {
+            0 => 0.0,
+            i if i > count => 1.0,
+            i => ((i - 1) as f64 + 0.5) / count as f64,
+        };
+        let laid = |out: &[GatePoint], i: usize| if i == 0 || i > count { at(u_of(i)) } else { out[first + i - 1] };
+        // Cusps found are pushed after the laid points: their indices hold.
+        let mut next = self.side(&laid(out, 0));
+        for i in 0..count + 1 {
+            let (this, after) = (next, self.side(&laid(out, i + 1)));
+            next = after;
+            let (Some(mut fa), Some(mut fb)) = (this, after) else { continue };
             if (fa > 0.0) == (fb > 0.0) {
                 continue;
             }
-            let (mut ua, mut ub) = (us[i], us[i + 1]);
-            let mut best = at(0.5 * (ua + ub));
+            let (mut ua, mut ub) = (u_of(i), u_of(i + 1));
+            let mut best = None;
             for _ in 0..CUSP_STEPS {
                 let u = if fb != fa { ua - fa * (ub - ua) / (fb - fa) } else { 0.5 * (ua + ub) };
                 let u = u.clamp(ua.min(ub), ua.max(ub));
-                best = at(u);
-                let Some(f) = self.side(&best) else { break };
+                let point = at(u);
+                best = Some(point);
+                let Some(f) = self.side(&point) else { break };
                 if f == 0.0 {
                     break;
                 }
@@ -582,7 +605,7 @@ impl<'r> Cutter<'r> {
                     fa *= 0.5;
                 }
             }
-            out.push(best);
+            out.extend(best);
         }
     }
 

@@ -1210,10 +1210,36 @@ fn parabola_dist2(d: DVec3, u: DVec3, v: DVec3, mut t: f64) -> f64 {
 
 /// Squared distance from `q` to the segment ab, and the parameter of the nearest point.
 pub(crate) fn segment_dist2_at(q: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
-    let ab = b - a;
-    let l2 = ab.length_squared();
-    let t = if l2 > 0.0 { ((q - a).dot(ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    ((a + ab * t - q).length_squared(), t)
+    Segment::new(a, b).dist2_at(q)
+}
+
+/// A segment with its direction and squared length, for the distances of many points to it
+/// (the gate's rings): the same operations as [`segment_dist2_at`], bit for bit, without
+/// forming b − a and |b − a|² each time.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Segment {
+    a: DVec3,
+    ab: DVec3,
+    l2: f64,
+}
+
+impl Segment {
+    pub(crate) fn new(a: DVec3, b: DVec3) -> Self {
+        let ab = b - a;
+        Self { a, ab, l2: ab.length_squared() }
+    }
+
+    /// Squared distance from `q`, and the parameter of the nearest point.
+    #[inline]
+    pub(crate) fn dist2_at(&self, q: DVec3) -> (f64, f64) {
+        let t = if self.l2 > 0.0 { ((q - self.a).dot(self.ab) / self.l2).clamp(0.0, 1.0) } else { 0.0 };
+        ((self.a + self.ab * t - q).length_squared(), t)
+    }
+
+    #[inline]
+    pub(crate) fn dist2(&self, q: DVec3) -> f64 {
+        self.dist2_at(q).0
+    }
 }
 
 /// Squared distance from `q` to the segment ab.
