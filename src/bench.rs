@@ -585,19 +585,9 @@ impl SweepFigures {
     /// what they leave (and ≤ 1.02 h outside their valleys).
     /// Both the plan's own samples and fresh ones are judged.
     pub fn within_limits(&self) -> bool {
-        self.judged(
-            self.max_over_h.max(self.fresh_max_over_h),
-            self.max_outside_valleys_over_h.max(self.fresh_max_outside_valleys_over_h),
-        )
-    }
-
-    /// [`SweepFigures::within_limits`] on the plan's own samples only.
-    pub fn within_limits_on_own_samples(&self) -> bool {
-        self.judged(self.max_over_h, self.max_outside_valleys_over_h)
-    }
-
-    fn judged(&self, max: f64, outside: f64) -> bool {
         let (max_over_h, uncovered, gouges) = SWEEP_LIMITS;
+        let max = self.max_over_h.max(self.fresh_max_over_h);
+        let outside = self.max_outside_valleys_over_h.max(self.fresh_max_outside_valleys_over_h);
         let warned = self.facet_depth_over_h > 1.0;
         let scallop = max <= max_over_h || (warned && max <= 1.1 * self.facet_depth_over_h && outside <= max_over_h);
         scallop && self.uncovered_fraction <= uncovered && self.gouges <= gouges

@@ -69,9 +69,10 @@ fn generated_parts_plan_within_the_scallop_limit() {
                 println!("{}: {:?}, {}", row.name, row.flatten.method, row.finish());
                 // Seed 6 peaks at 1.67 h in the valleys its facets alone leave (2.04 h deep): the
                 // plan warns of them, and `within_limits` accepts that.
-                // Judged on the plan's own samples: on fresh ones gen001, gen002 and gen006 still
-                // leave 1.02–1.05 h (issue 34, open; `cargo bench --bench sweep` judges both).
-                if !row.within_limits_on_own_samples() {
+                // Judged on the plan's own samples and on fresh ones, as the sweep bench judges
+                // (with three cusp lines per face gen001, gen002 and gen006 left 1.02–1.05 h on
+                // fresh samples; the gate's lines R/12 apart on coarse faces keep all under h).
+                if !row.within_limits() {
                     failures.push(format!("{}: {}", row.name, row.finish()));
                 }
                 // Whatever the facets leave over h, the user was told before trusting the file.
