@@ -19,7 +19,7 @@
 //! generated parts between the fixed points, beside creases and round the corners of the outer
 //! loop, which the map squeezes into a face or two.
 
-use super::Segment;
+use super::{Lift, Segment};
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::Surface;
 use crate::num;
@@ -55,6 +55,9 @@ type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2, usize);
 /// Where each band is tested, precomputed per map.
 pub(super) struct Gate<'a> {
     surface: &'a Surface,
+    /// The facet tree of `surface`: locates the points a ring must move up to (see
+    /// [`Gate::relabel`]).
+    faces: &'a FaceTree,
     /// Log-polar corners (arg w, |w|) per face.
     corners: Vec<[DVec2; 3]>,
     /// |w| range per face.
@@ -114,7 +117,7 @@ impl<'a> Gate<'a> {
     pub(super) fn new(
         surface: &'a Surface,
         map: &SlitMap,
-        faces: &FaceTree,
+        faces: &'a FaceTree,
         radius_mm: f64,
         lift_h: Option<f64>,
     ) -> Self {
@@ -143,7 +146,19 @@ impl<'a> Gate<'a> {
             || ByRadius::new(rho_range.iter().copied()),
             || ByRadius::new(edges.iter().map(|e| (e.2.y.min(e.3.y), e.2.y.max(e.3.y)))),
         );
-        Self { surface, corners, rho_range, rho_gradient, edges, tips, face_index, edge_index, radius_mm, lift_h }
+        Self {
+            surface,
+            faces,
+            corners,
+            rho_range,
+            rho_gradient,
+            edges,
+            tips,
+            face_index,
+            edge_index,
+            radius_mm,
+            lift_h,
+        }
     }
 
     /// The points of the band between rings `lo` < `hi` where its scallop may peak, that
@@ -185,6 +200,17 @@ impl<'a> Gate<'a> {
         let tips = &self.tips[first..];
         let tips = cutter.uncut(&tips[..tips.partition_point(|p| p.2 < hi)]);
         faces.into_iter().chain(edges).flatten().chain(tips).collect()
+    }
+
+    /// `p` with the image (|w|, arg w) that `lift` sends to its place on the surface. The points
+    /// are laid and labelled in the strip's P1 image, which the lift inverts everywhere but in
+    /// its pole star (lifted through the w plane, see [`Lift::image_of`]): there a ring moved up
+    /// to a point's strip radius could still pass a band away from it (gen017: 0.27 mm beside a
+    /// slit's chords, the gate compromised and left 1.38 h).
+    pub(super) fn relabel(&self, p: &mut GatePoint, lift: &Lift<'_>) {
+        if let Some(hit) = self.faces.nearest(p.0, self.radius_mm).filter(|hit| lift.in_pole_star(hit.face)) {
+            (p.2, p.3) = lift.image_of(hit.face, hit.bary);
+        }
     }
 
     /// The lines |w| = const of the band (`lo`, `hi`) across face `f`.

@@ -199,6 +199,26 @@ impl<'a> Lift<'a> {
         self.vertex_faces[s..e].iter().map(|&g| g as usize).find(|&g| g != f && self.surface.triangles[g].contains(&b))
     }
 
+    /// The image point (|w|, arg w) this lift sends to barycentric `bary` of `face`: its own
+    /// inverse. In the strip that is the P1 image; in the pole star it is not, as the star lifts
+    /// through the w plane after a warp along each ray (see [`PoleStar`]), which near a slit's
+    /// chords moves points by up to a band (gen017: 0.27 mm). Points located on the surface
+    /// (the gate's) get the radius of the ring that runs through them from here.
+    pub fn image_of(&self, face: usize, bary: [f64; 3]) -> (f64, f64) {
+        if let Some(image) = self.star.as_ref().and_then(|star| star.image_of(face, bary)) {
+            return image;
+        }
+        let c = self.corners[face];
+        let at = |k: fn(DVec2) -> f64| bary[0] * k(c[0]) + bary[1] * k(c[1]) + bary[2] * k(c[2]);
+        (at(|c| c.y), at(|c| c.x))
+    }
+
+    /// Whether `face` is lifted through the pole star (where [`Lift::image_of`] is not the
+    /// strip's P1 image).
+    pub fn in_pole_star(&self, face: usize) -> bool {
+        self.star.as_ref().is_some_and(|star| star.faces.binary_search_by_key(&face, |f| f.0).is_ok())
+    }
+
     /// The point lifted through the pole star when it lies in it (or, with `clamp`, the nearest
     /// point of the star: the strip located nothing).
     fn in_star(&self, rho: f64, theta: f64, clamp: bool) -> Option<Lifted> {
@@ -327,9 +347,35 @@ impl PoleStar {
             return None; // winds more than once, or leaves gaps: not star-shaped
         }
         rim.sort_by(|x, y| x.0.total_cmp(&y.0));
+        // Sorted by face (`faces` is): [`PoleStar::image_of`] searches them.
         let faces = faces.iter().map(|&f| (f, tris[f].map(|v| map.w[v as usize]))).collect();
         let reach = rim.iter().map(|e| e.2.length()).fold(0.0, f64::max);
         Some(Self { faces, rim, reach })
+    }
+
+    /// The inverse of [`PoleStar::locate`] (unclamped): (|w|, arg w) of the query that lands on
+    /// barycentric `bary` of `face`, when that is a face of the star. The point's w-plane image
+    /// lies on the ray through the rim chord's point at fraction t of rim edge (wa, wb); the query
+    /// had angle ta + t·span and radius s·(|wa| + t(|wb| − |wa|)), s its fraction of that point.
+    fn image_of(&self, face: usize, bary: [f64; 3]) -> Option<(f64, f64)> {
+        let i = self.faces.binary_search_by_key(&face, |f| f.0).ok()?;
+        let c = self.faces[i].1;
+        let w = c[0] * bary[0] + c[1] * bary[1] + c[2] * bary[2];
+        if self.rim.is_empty() {
+            return Some((w.length(), num::arg(w)));
+        }
+        let theta = num::arg(w);
+        let &(ta, span, wa, wb) =
+            self.rim.iter().find(|e| crate::num::rem_tau(theta - e.0) < e.1).unwrap_or_else(|| {
+                self.rim.iter().min_by(|x, y| gap(theta, x).total_cmp(&gap(theta, y))).expect("a rim")
+            });
+        // The ray through w meets the chord at t: w × (wa + t(wb − wa)) = 0.
+        let den = w.perp_dot(wb - wa);
+        let t = if den != 0.0 { (-w.perp_dot(wa) / den).clamp(0.0, 1.0) } else { 0.0 };
+        let chord = wa + t * (wb - wa);
+        let s = w.length() / chord.length();
+        let rim_rho = wa.length() + t * (wb.length() - wa.length());
+        Some((s * rim_rho, crate::num::rem_tau(ta + t * span + PI) - PI))
     }
 
     /// Face and barycentric coordinates of the point `rho · e^{iθ}` when it lies in the star
@@ -610,5 +656,40 @@ mod tests {
             let expected = 0.5 * (surface.positions[a] + surface.positions[b]);
             assert!(l.p.distance(expected) < 1e-6, "edge {a}–{b}: {:?} vs {expected:?}", l.p);
         }
+    }
+
+    #[test]
+    fn image_of_inverts_the_lift_inside_and_outside_the_pole_star() {
+        // The gate moves a ring up to the radius the lift gives a point's place (gen017's star
+        // reached a slit, where the strip's P1 image put points 0.27 mm off their ring): lifting
+        // a grid of image points and asking where each came from must give it back.
+        let (surface, map) = mapped("plate_3_holes");
+        let lift = Lift::new(&surface, &map);
+        let reach = lift.star.as_ref().expect("a pole star").reach;
+        let (mut in_star, mut outside) = (0, 0);
+        for i in 1..=40 {
+            let rho = 3.0 * reach * i as f64 / 40.0;
+            for j in 0..64 {
+                let theta = -PI + TAU * (j as f64 + 0.5) / 64.0;
+                let Some(l) = lift.polar(rho, theta) else { continue };
+                let [a, b, c] = surface.triangles[l.face as usize].map(|v| surface.positions[v as usize]);
+                // Barycentric coordinates of the lifted point, from the surface.
+                let (v0, v1, v2) = (b - a, c - a, l.p - a);
+                let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
+                let den = d00 * d11 - d01 * d01;
+                let (v, w) = ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den);
+                let (r, t) = lift.image_of(l.face as usize, [1.0 - v - w, v, w]);
+                assert!(
+                    (r - rho).abs() < 1e-9 && (crate::num::rem_tau(t - theta + PI) - PI).abs() < 1e-7,
+                    "({rho}, {theta}) came back as ({r}, {t})"
+                );
+                if lift.in_pole_star(l.face as usize) {
+                    in_star += 1;
+                } else {
+                    outside += 1;
+                }
+            }
+        }
+        assert!(in_star > 100 && outside > 100, "{in_star} points in the star, {outside} outside");
     }
 }

@@ -433,7 +433,7 @@ impl<'a> SpacingIndex<'a> {
     pub fn new(
         surface: &'a Surface,
         map: &'a SlitMap,
-        faces: &FaceTree,
+        faces: &'a FaceTree,
         options: &SpacingOptions,
     ) -> Result<Self, SpacingError> {
         check_options(options)?;
@@ -671,7 +671,8 @@ impl<'a> Spacer<'a> {
     /// user's h·[`GATE_FRACTION`]; `first` is the ring's polyline at `lo` and the points it
     /// leaves uncut ([`Spacer::gate_test`]). While some are not cut, the ring moves up, by
     /// bisection on those points between its place and the lowest |w| among them (where the ring
-    /// runs through that point, unless the P1 image overlaps itself there), and the band is
+    /// runs through that point as the lift places rings, see [`gate::Gate::relabel`], unless
+    /// the P1 image overlaps itself there), and the band is
     /// gated again, at most [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
     fn gated(
         &mut self,
@@ -687,10 +688,16 @@ impl<'a> Spacer<'a> {
             if bad.is_empty() {
                 return Ok((lo, lower));
             }
+            // Each at the radius of the ring through it as the lift sees it (the top below).
+            for p in &mut bad {
+                self.gate.relabel(p, self.lift);
+            }
             // Points on ring k's own line (the rim, for the first ring) are its to cut: ring
             // k + 1 moved onto it would cut them no better and make no progress (the band was
             // then spaced again and again, for ever).
-            bad.retain(|p| p.2 < hi);
+            // Points the lift puts below this ring (its pole star, where the strip's image the
+            // points were laid in degenerates) are the next band's: moving up cannot cut them.
+            bad.retain(|p| p.2 < hi && p.2 > lo);
             if bad.is_empty() {
                 break;
             }
