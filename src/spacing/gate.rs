@@ -15,9 +15,9 @@
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
 //! its top: on every edge crossing the band and on lines arg w = const across each of its faces
 //! (at least [`CROSSINGS`] − 1, more on coarse faces), the cusp itself is located (where the two
-//! rings are equally far) and tested too ([`Cutter::add_cusps`]). Issue 34's sweep found the finish at 1.02–1.33 h on 11 of 200 coarse
-//! generated parts between the fixed points, beside creases and round the corners of the outer
-//! loop, which the map squeezes into a face or two.
+//! rings are equally far) and tested too ([`Cutter::add_cusps`]). Issue 34's sweep found the
+//! finish at 1.02–1.33 h on 11 of 200 coarse generated parts between the fixed points, beside
+//! creases and round the corners of the outer loop, which the map squeezes into a face or two.
 
 use super::{Lift, Segment};
 use crate::mesh::nearest::FaceTree;
@@ -181,8 +181,11 @@ impl<'a> Gate<'a> {
             })
         };
         let faces = chunked(self.face_index.near(lo, hi).collect(), &|f, out| {
-            self.face_lines(f, lo, hi, out);
-            self.face_crossings(f, lo, hi, cutter, out);
+            let (r0, r1) = self.rho_range[f];
+            if r1 > lo && r0 < hi {
+                self.face_lines(f, lo, hi, out);
+                self.face_crossings(f, lo, hi, cutter, out);
+            }
         });
         let edges = chunked(self.edge_index.near(lo, hi).collect(), &|e, out| {
             let ([a, b], normals, wa, wb, face) = self.edges[e];
@@ -213,12 +216,9 @@ impl<'a> Gate<'a> {
         }
     }
 
-    /// The lines |w| = const of the band (`lo`, `hi`) across face `f`.
+    /// The lines |w| = const of the band (`lo`, `hi`) across face `f`, a face of the band.
     fn face_lines(&self, f: usize, lo: f64, hi: f64, out: &mut Vec<GatePoint>) {
         let (r0, r1) = self.rho_range[f];
-        if !(r1 > lo && r0 < hi) {
-            return;
-        }
         let width = (hi - lo) / self.rho_gradient[f];
         let least = if self.lift_h.is_some() { MIN_STRIPS_LIFTED } else { MIN_STRIPS };
         let strips = (width / (STRIP * self.radius_mm)).clamp(least, 64.0).log2().ceil().exp2() as usize;
@@ -233,15 +233,12 @@ impl<'a> Gate<'a> {
         }
     }
 
-    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, evenly over its angular
-    /// extent (see [`CROSSINGS`]), with their cusps ([`Cutter::add_cusps`]): the ring pair's
-    /// cusp inside a face, where the rings bend most (round the corner of an outer loop the map
-    /// squeezes into one face), lies between the face's edges.
+    /// Lines arg w = const across the band (`lo`, `hi`) inside face `f`, a face of the band,
+    /// evenly over its angular extent (see [`CROSSINGS`]), with their cusps
+    /// ([`Cutter::add_cusps`]): the ring pair's cusp inside a face, where the rings bend most
+    /// (round the corner of an outer loop the map squeezes into one face), lies between the
+    /// face's edges.
     fn face_crossings(&self, f: usize, lo: f64, hi: f64, cutter: &Cutter<'_>, out: &mut Vec<GatePoint>) {
-        let (r0, r1) = self.rho_range[f];
-        if !(r1 > lo && r0 < hi) {
-            return;
-        }
         let c = self.corners[f];
         let (x0, x1) = (c[0].x.min(c[1].x).min(c[2].x), c[0].x.max(c[1].x).max(c[2].x));
         if !(x1 > x0) {

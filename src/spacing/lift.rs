@@ -674,11 +674,8 @@ mod tests {
                 let Some(l) = lift.polar(rho, theta) else { continue };
                 let [a, b, c] = surface.triangles[l.face as usize].map(|v| surface.positions[v as usize]);
                 // Barycentric coordinates of the lifted point, from the surface.
-                let (v0, v1, v2) = (b - a, c - a, l.p - a);
-                let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
-                let den = d00 * d11 - d01 * d01;
-                let (v, w) = ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den);
-                let (r, t) = lift.image_of(l.face as usize, [1.0 - v - w, v, w]);
+                let bary = crate::mesh::nearest::closest_on_triangle(l.p, a, b, c);
+                let (r, t) = lift.image_of(l.face as usize, bary);
                 assert!(
                     (r - rho).abs() < 1e-9 && (crate::num::rem_tau(t - theta + PI) - PI).abs() < 1e-7,
                     "({rho}, {theta}) came back as ({r}, {t})"

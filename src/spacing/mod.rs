@@ -672,8 +672,8 @@ impl<'a> Spacer<'a> {
     /// leaves uncut ([`Spacer::gate_test`]). While some are not cut, the ring moves up, by
     /// bisection on those points between its place and the lowest |w| among them (where the ring
     /// runs through that point as the lift places rings, see [`gate::Gate::relabel`], unless
-    /// the P1 image overlaps itself there), and the band is
-    /// gated again, at most [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
+    /// the P1 image overlaps itself there), and the band is gated again, at most
+    /// [`GATE_ROUNDS`] times. Returns the ring and its ball-centre polyline.
     fn gated(
         &mut self,
         hi: f64,
