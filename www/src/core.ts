@@ -392,11 +392,12 @@ export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onP
     read_ms: number;
     tessellate_ms: number;
   };
+  // The arrays stay as the core serialised them: stepDrawing reads each once into its own.
   return {
     faces: out.faces,
-    positions: Float32Array.from(out.positions),
-    triangles: Uint32Array.from(out.triangles),
-    faceOfTriangle: Float64Array.from(out.face_of_triangle),
+    positions: out.positions,
+    triangles: out.triangles,
+    faceOfTriangle: out.face_of_triangle,
     chordalErrorMm: out.chordal_error_mm,
     readMs: out.read_ms,
     tessellateMs: out.tessellate_ms,
