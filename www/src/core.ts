@@ -24,7 +24,6 @@ export interface MeshOptions {
 export type Vec3 = [number, number, number];
 export type Vec2 = [number, number];
 
-/** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
 /** One handle's cut (mesh::handles::HandleCut). */
 export interface HandleCut {
   /** Length of what is cut (the loop's edges off the rims), mm. */
@@ -42,6 +41,7 @@ export interface HandleCut {
   polyline_mm: [number, number, number][];
 }
 
+/** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
 export interface MeshReport {
   vertices: number;
   faces: number;
