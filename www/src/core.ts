@@ -24,7 +24,6 @@ export interface MeshOptions {
 export type Vec3 = [number, number, number];
 export type Vec2 = [number, number];
 
-/** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
 /** One handle's cut (mesh::handles::HandleCut). */
 export interface HandleCut {
   /** Length of what is cut (the loop's edges off the rims), mm. */
@@ -42,6 +41,7 @@ export interface HandleCut {
   polyline_mm: [number, number, number][];
 }
 
+/** The mesh stage's report (Rust `slitpath::mesh::MeshReport`, as `slitpath info --json`). */
 export interface MeshReport {
   vertices: number;
   faces: number;
@@ -392,11 +392,12 @@ export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onP
     read_ms: number;
     tessellate_ms: number;
   };
+  // The arrays stay as the core serialised them: stepDrawing reads each once into its own.
   return {
     faces: out.faces,
-    positions: Float32Array.from(out.positions),
-    triangles: Uint32Array.from(out.triangles),
-    faceOfTriangle: Float64Array.from(out.face_of_triangle),
+    positions: out.positions,
+    triangles: out.triangles,
+    faceOfTriangle: out.face_of_triangle,
     chordalErrorMm: out.chordal_error_mm,
     readMs: out.read_ms,
     tessellateMs: out.tessellate_ms,

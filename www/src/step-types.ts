@@ -30,14 +30,14 @@ export interface StepFace {
   adjacent: number[];
 }
 
-/** The faces of a STEP file, tessellated (the facade's `stepFaces`). */
+/** The faces of a STEP file, tessellated (the facade's `stepFaces`; plain arrays, as the core serialises them). */
 export interface StepFacesOutput {
   faces: StepFace[];
   /** xyz per vertex (welded: faces share their edges' vertices). */
-  positions: Float32Array;
-  triangles: Uint32Array;
+  positions: number[];
+  triangles: number[];
   /** STEP id of each triangle's face. */
-  faceOfTriangle: Float64Array;
+  faceOfTriangle: number[];
   chordalErrorMm: number;
   readMs: number;
   tessellateMs: number;

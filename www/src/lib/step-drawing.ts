@@ -42,6 +42,8 @@ export function stepDrawing(faces: StepFacesOutput): StepDrawing {
     }
   }
   const positions = new Float32Array(3 * source.length);
-  source.forEach((v, w) => positions.set(faces.positions.subarray(3 * v, 3 * v + 3), 3 * w));
+  source.forEach((v, w) => {
+    for (let k = 0; k < 3; k++) positions[3 * w + k] = faces.positions[3 * v + k]!;
+  });
   return { positions, normals: vertexNormals(positions, triangles), triangles, faceOfVertex: Uint32Array.from(faceOfVertex), faceOfTriangle };
 }

@@ -64,6 +64,9 @@ const buffers = (...arrays: (ArrayBufferView | null)[]): ArrayBuffer[] =>
   arrays.filter((a): a is ArrayBufferView => a !== null).map((a) => a.buffer as ArrayBuffer);
 const polylineBuffers = (p: Polyline) => buffers(p.positions, p.colours, p.segments, p.points);
 
+/** The G-code header names the part like the CLI does: the file name without its extension. */
+const partName = (fileName: string) => fileName.replace(/\.[^./\\]*$/, "") || "part";
+
 function centroid(uv: Float64Array): [number, number] {
   let [x, y] = [0, 0];
   for (let i = 0; i < uv.length; i += 2) [x, y] = [x + uv[i]!, y + uv[i + 1]!];
@@ -144,8 +147,7 @@ async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions
   const [outer, ...holes] = loops;
   current = {
     part,
-    // The G-code header names the part like the CLI does: the file name without its extension.
-    name: name.replace(/\.[^./\\]*$/, "") || "part",
+    name: partName(name),
     bytes,
     meshOptions,
     stepOptions,
@@ -191,8 +193,7 @@ async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promis
   if (stepFile === undefined) throw new Error("the Coons band strategy needs a STEP file: open a .step or .stp part");
   const started = performance.now();
   post({ type: "progress", id: request.id, stage: "Coons band spiral", done: 0, total: 2 });
-  const partName = stepFile.name.replace(/\.[^./\\]*$/, "") || "part";
-  const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName });
+  const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName: partName(stepFile.name) });
   post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
   // The report's radius is the one planned with (the core's default when none was given).
   const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, output.report.radius_mm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
