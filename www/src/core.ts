@@ -348,9 +348,10 @@ export class Part {
 }
 
 /**
- * Plans flank strips (5-axis, conical tool, seed 002) for the STL `stl`; throws an Error whose
- * message names the fault (bad tool, rigidity not reached, …). The flank planner needs only the
- * mesh, not the slit map: it reads the STL itself.
+ * Plans flank strips (5-axis, conical tool, seed 002) for the STL `stl`, or (STEP bytes) the
+ * file's faces `stepOptions.faces` (default all); throws an Error whose message names the fault
+ * (bad tool, rigidity not reached, …). The flank planner needs only the mesh, not the slit map:
+ * it reads the file itself.
  */
 export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback, stepOptions?: StepOptions): Promise<FlankOutput> {
   await initCore();
