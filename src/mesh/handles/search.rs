@@ -101,7 +101,7 @@ impl<'a> Search<'a> {
         if !exhaustive {
             for _ in 0..options.shortening_rounds {
                 let before = best.map(|b| b.0.length);
-                for &x in &cycle.0.clone() {
+                for &x in &cycle.0 {
                     improve(self, x, &mut best);
                 }
                 if best.map(|b| b.0.length) == before {
