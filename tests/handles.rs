@@ -55,7 +55,7 @@ fn sampled_roots_find_the_same_cut_on_a_larger_torus() {
 fn a_closed_surface_is_left_alone_and_keeps_its_error() {
     let topo = topology::analyse(&torus(30.0, 8.0, 24, 8, 0), DVec3::Z).unwrap();
     let surface = geometry::build_surface(topology::largest_component(&topo).1).unwrap();
-    let (cut, cuts) = handles::cut_handles(&surface, &handles::HandleOptions::default()).unwrap();
+    let (cut, cuts) = handles::cut_handles(surface, &handles::HandleOptions::default()).unwrap();
     assert!(cuts.is_empty());
     assert_eq!(cut.check_plannable().unwrap_err(), MeshError::Closed);
 }

@@ -197,15 +197,15 @@ fn a_trimmed_bspline_part_plans_end_to_end_with_the_verifier_passing() {
 /// whose faces see exactly their grid neighbours, within the chordal tolerance.
 #[test]
 fn the_twenty_face_grid_is_one_welded_surface() {
-    let (_, t) = tess(&fx::field_grid(), &StepOptions::default());
+    let out =
+        step::load(fx::field_grid().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    let t = &out.step;
     assert_eq!(t.faces.len(), 20);
     let mut degrees: Vec<usize> = t.faces.iter().map(|f| f.adjacent.len()).collect();
     degrees.sort_unstable();
     // 5 × 4 grid: 4 corners (2 neighbours), 10 border faces (3), 6 inner faces (4).
     assert_eq!(degrees, [vec![2; 4], vec![3; 10], vec![4; 6]].concat());
     assert!(t.chordal_error_mm <= 0.01 + 1e-9, "{}", t.chordal_error_mm);
-    let out =
-        step::load(fx::field_grid().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
     assert_eq!((out.mesh.report.components, out.mesh.report.boundary_loops, out.mesh.report.closed), (1, 1, false));
 }
 

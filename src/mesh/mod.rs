@@ -328,7 +328,7 @@ pub fn from_triangles(mesh: &TriMesh, options: &MeshOptions) -> Result<MeshOutpu
         component = top_component;
     }
     let surface = geometry::build_surface(component)?;
-    let (surface, handle_cuts) = handles::cut_handles(&surface, &options.handles)?;
+    let (surface, handle_cuts) = handles::cut_handles(surface, &options.handles)?;
     report.handle_cuts = handle_cuts;
     Ok(MeshOutput { report, surface })
 }

@@ -170,21 +170,21 @@ pub fn read_and_tessellate(
     let t0 = now();
     let model = read(bytes)?;
     let read_ms = now() - t0;
-    let (model, tess, [_, tessellate_ms]) = tessellate_model(model, o, now)?;
+    let (tess, tessellate_ms) = tessellate_model(&model, o, now)?;
     Ok((model, tess, [read_ms, tessellate_ms]))
 }
 
-/// [`read_and_tessellate`] of a model already read (so a caller can report progress between the
-/// two); the read time returned is 0.
+/// The tessellation half of [`read_and_tessellate`], of a model already read (so a caller can
+/// report progress between the two), with its time in milliseconds.
 pub fn tessellate_model(
-    model: Model,
+    model: &Model,
     o: &StepOptions,
     now: &dyn Fn() -> f64,
-) -> Result<(Model, Tessellation, [f64; 2]), StepError> {
+) -> Result<(Tessellation, f64), StepError> {
     check_options(o)?;
     let t1 = now();
-    let tess = tessellate::tessellate(&model, o.faces.as_deref(), o)?;
-    Ok((model, tess, [0.0, now() - t1]))
+    let tess = tessellate::tessellate(model, o.faces.as_deref(), o)?;
+    Ok((tess, now() - t1))
 }
 
 /// STEP bytes → the planner's surface and the STEP report. `now` gives milliseconds.

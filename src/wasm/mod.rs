@@ -147,7 +147,7 @@ pub fn step_faces(
     let model = crate::step::read(step).map_err(js_err)?;
     let read_ms = now() - t0;
     progress("tessellating faces", 1, 2);
-    let (_, t, [_, tessellate_ms]) = crate::step::tessellate_model(model, &o, &now).map_err(js_err)?;
+    let (t, tessellate_ms) = crate::step::tessellate_model(&model, &o, &now).map_err(js_err)?;
     #[derive(Serialize)]
     struct Faces {
         faces: Vec<crate::step::FaceInfo>,

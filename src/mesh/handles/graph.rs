@@ -4,8 +4,7 @@
 use super::NONE;
 use crate::mesh::Surface;
 
-/// The edge graph of a surface: edges (lo < hi) with their faces, per-vertex adjacency (CSR)
-/// and which vertices lie on the boundary.
+/// The edge graph of a surface: edges (lo < hi) with their faces and per-vertex adjacency (CSR).
 pub(super) struct Graph {
     /// `(lo, hi)`, sorted.
     pub(super) edges: Vec<(u32, u32)>,
@@ -14,10 +13,9 @@ pub(super) struct Graph {
     /// What an edge costs a loop: its length, 0 along a rim.
     pub(super) length: Vec<f64>,
     pub(super) true_length: Vec<f64>,
-    pub(super) start: Vec<u32>,
+    start: Vec<u32>,
     /// `(neighbour, edge)` per vertex.
-    pub(super) adjacent: Vec<(u32, u32)>,
-    pub(super) boundary: Vec<bool>,
+    adjacent: Vec<(u32, u32)>,
 }
 
 impl Graph {
@@ -40,28 +38,13 @@ impl Graph {
             edges.iter().map(|&(a, b)| s.positions[a as usize].distance(s.positions[b as usize])).collect();
         // Edges along the boundary cost nothing: a loop may follow a rim, which is not cut.
         let length = true_length.iter().zip(&faces).map(|(&l, f)| if f.contains(&NONE) { 0.0 } else { l }).collect();
-        let mut boundary = vec![false; nv];
-        let mut start = vec![0u32; nv + 1];
-        for (e, &(a, b)) in edges.iter().enumerate() {
-            start[a as usize + 1] += 1;
-            start[b as usize + 1] += 1;
-            if faces[e].contains(&NONE) {
-                boundary[a as usize] = true;
-                boundary[b as usize] = true;
-            }
-        }
-        for v in 0..nv {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut adjacent = vec![(0, 0); start[nv] as usize];
-        for (e, &(a, b)) in edges.iter().enumerate() {
-            adjacent[fill[a as usize] as usize] = (b, e as u32);
-            fill[a as usize] += 1;
-            adjacent[fill[b as usize] as usize] = (a, e as u32);
-            fill[b as usize] += 1;
-        }
-        Self { edges, faces, length, true_length, start, adjacent, boundary }
+        let (start, adjacent) = adjacency(nv, edges.iter().enumerate().map(|(e, &(a, b))| (a, b, e as u32)));
+        Self { edges, faces, length, true_length, start, adjacent }
+    }
+
+    /// The number of vertices.
+    pub(super) fn vertices(&self) -> usize {
+        self.start.len() - 1
     }
 
     pub(super) fn neighbours(&self, v: u32) -> &[(u32, u32)] {
@@ -104,24 +87,13 @@ impl Graph {
             let cap = cap_of[self.edges[e].0 as usize];
             [if f == NONE { cap } else { f }, if g == NONE { cap } else { g }]
         };
-        let mut dual_start = vec![0u32; nodes + 1];
-        for e in (0..ne).filter(|&e| !in_tree[e]) {
-            for n in dual(e) {
-                dual_start[n as usize + 1] += 1;
-            }
-        }
-        for n in 0..nodes {
-            dual_start[n + 1] += dual_start[n];
-        }
-        let mut fill = dual_start.clone();
-        let mut dual_adjacent = vec![(0u32, 0u32); dual_start[nodes] as usize];
-        for e in (0..ne).filter(|&e| !in_tree[e]) {
-            let [m, n] = dual(e);
-            dual_adjacent[fill[m as usize] as usize] = (n, e as u32);
-            fill[m as usize] += 1;
-            dual_adjacent[fill[n as usize] as usize] = (m, e as u32);
-            fill[n as usize] += 1;
-        }
+        let (dual_start, dual_adjacent) = adjacency(
+            nodes,
+            (0..ne).filter(|&e| !in_tree[e]).map(|e| {
+                let [m, n] = dual(e);
+                (m, n, e as u32)
+            }),
+        );
         // C: breadth-first spanning tree of the dual through the edges not in T.
         let mut parent_edge = vec![NONE; nodes];
         let mut in_cotree = vec![false; ne];
@@ -163,4 +135,26 @@ impl Graph {
         }
         Ok(signature)
     }
+}
+
+/// The adjacency (CSR: `start`, then `(neighbour, link)` per node) of `nodes` nodes joined by
+/// the links `(m, n, link)`, each listed at both its ends in the links' order.
+fn adjacency(nodes: usize, links: impl Iterator<Item = (u32, u32, u32)> + Clone) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let mut start = vec![0u32; nodes + 1];
+    for (m, n, _) in links.clone() {
+        start[m as usize + 1] += 1;
+        start[n as usize + 1] += 1;
+    }
+    for i in 0..nodes {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut adjacent = vec![(0, 0); start[nodes] as usize];
+    for (m, n, link) in links {
+        adjacent[fill[m as usize] as usize] = (n, link);
+        fill[m as usize] += 1;
+        adjacent[fill[n as usize] as usize] = (m, link);
+        fill[n as usize] += 1;
+    }
+    (start, adjacent)
 }

@@ -180,10 +180,11 @@ pub struct HandleCut {
 
 /// The surface cut along one short loop per handle, and the cuts (empty when the genus is 0
 /// already). A closed surface is returned as it is (the planner refuses it with its own error).
-pub fn cut_handles(surface: &Surface, options: &HandleOptions) -> Result<(Surface, Vec<HandleCut>), HandleError> {
+/// By value: every load passes through here, and a surface of genus 0 is returned uncopied.
+pub fn cut_handles(surface: Surface, options: &HandleOptions) -> Result<(Surface, Vec<HandleCut>), HandleError> {
     let genus = surface.genus();
     if genus <= 0 || surface.loops.is_empty() {
-        return Ok((surface.clone(), Vec::new()));
+        return Ok((surface, Vec::new()));
     }
     if genus > MAX_GENUS {
         return Err(HandleError::TooManyHandles { genus, max: MAX_GENUS });
@@ -194,7 +195,7 @@ pub fn cut_handles(surface: &Surface, options: &HandleOptions) -> Result<(Surfac
     if !(options.crossing_ratio >= 0.0 && options.crossing_ratio.is_finite()) {
         return Err(HandleError::Ratio { name: "crossing", ratio: options.crossing_ratio, min: 0.0 });
     }
-    let mut s = surface.clone();
+    let mut s = surface;
     let mut cuts = Vec::new();
     for handle in 0..genus as usize {
         // Each cut below is checked to lower the genus by exactly one.

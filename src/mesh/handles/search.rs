@@ -62,7 +62,7 @@ impl Class {
 
 impl<'a> Search<'a> {
     pub(super) fn new(graph: &'a Graph, signature: &'a [u128]) -> Self {
-        let nv = graph.boundary.len();
+        let nv = graph.vertices();
         Self {
             graph,
             signature,
@@ -78,7 +78,7 @@ impl<'a> Search<'a> {
     /// The shortest non-separating cycle over the roots of the module docs, as a vertex cycle
     /// with its length (rims free) and signature; `None` when there is none.
     pub(super) fn shortest(&mut self, options: &HandleOptions) -> Option<(Vec<u32>, Found)> {
-        let nv = self.graph.boundary.len();
+        let nv = self.graph.vertices();
         let exhaustive = nv < options.exhaustive_below_vertices || nv <= options.sampled_roots;
         let roots: Vec<u32> = if exhaustive {
             (0..nv as u32).collect()
@@ -101,7 +101,7 @@ impl<'a> Search<'a> {
         if !exhaustive {
             for _ in 0..options.shortening_rounds {
                 let before = best.map(|b| b.0.length);
-                for &x in &cycle.0.clone() {
+                for &x in &cycle.0 {
                     improve(self, x, &mut best);
                 }
                 if best.map(|b| b.0.length) == before {
@@ -207,15 +207,15 @@ impl<'a> Search<'a> {
         const OUT: u8 = 2;
         let limit = ratio * found.length * (1.0 + 1e-9) + 1e-12;
         let class = Class::Exactly(found.signature);
-        let nv = self.graph.boundary.len();
+        let nv = self.graph.vertices();
         let mut state = vec![UNTESTED; nv];
         let mut stack = shortest.to_vec();
         for &v in shortest {
             state[v as usize] = IN;
         }
         while let Some(v) = stack.pop() {
-            for i in self.graph.start[v as usize]..self.graph.start[v as usize + 1] {
-                let w = self.graph.adjacent[i as usize].0;
+            let graph = self.graph;
+            for &(w, _) in graph.neighbours(v) {
                 if state[w as usize] == UNTESTED {
                     let inside = self.search_from(w, limit, class).is_some();
                     state[w as usize] = if inside { IN } else { OUT };
