@@ -267,3 +267,42 @@ fn a_cylinder_band_without_a_seam_edge_is_joined_by_a_synthetic_seam() {
         assert!((za.abs() < 1e-9 && zb.abs() < 1e-9) || ((za - 5.0).abs() < 1e-9 && (zb - 5.0).abs() < 1e-9));
     }
 }
+
+/// A CAD solid opened without a face selection is planned on its top, as an STL solid is, but by
+/// whole faces: the block's B-spline top (not its walls or bottom), or the wall that faces
+/// another tool axis. A selection that still encloses the solid is refused as before.
+#[test]
+fn a_closed_solid_without_a_selection_is_planned_on_its_top_faces() {
+    let text = fx::field_block();
+    let (model, _) = tess(&text, &StepOptions::default());
+    assert_eq!(model.faces.len(), 6);
+    let out = step::load(text.as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    assert!(out.step.top_of_solid);
+    assert_eq!(out.step.faces.len(), 1);
+    assert_eq!(out.step.faces[0].surface, "b-spline");
+    assert!(!out.mesh.report.closed);
+    assert_eq!(out.mesh.surface.loops.len(), 1);
+    let area = out.mesh.surface.area();
+    assert!((area - out.step.faces[0].area_mm2).abs() < 1e-6 * area && area > 60.0 * 40.0, "area {area} mm²");
+    assert!(out.face_of_triangle.iter().all(|&f| f == out.step.faces[0].id));
+
+    let sideways = MeshOptions { tool_axis: DVec3::X, ..MeshOptions::default() };
+    let wall = step::load(text.as_bytes(), &StepOptions::default(), &sideways, &|| 0.0).unwrap();
+    assert_eq!(wall.step.faces.len(), 1);
+    assert_eq!(wall.step.faces[0].surface, "plane");
+    assert!(wall.mesh.surface.positions.iter().all(|p| (p.x - fx::FIELD_MM[0]).abs() < 1e-9));
+
+    let all = StepOptions { faces: Some(model.faces.iter().map(|f| f.id).collect()), ..StepOptions::default() };
+    match step::load(text.as_bytes(), &all, &MeshOptions::default(), &|| 0.0) {
+        Err(StepError::NotOneSurface { reason, .. }) => assert!(reason.contains("solid"), "{reason}"),
+        other => panic!("expected NotOneSurface, got {other:?}"),
+    }
+
+    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
+    let h = 0.02;
+    let options =
+        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
+}

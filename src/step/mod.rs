@@ -116,6 +116,8 @@ pub struct StepReport {
     pub faces_in_file: Vec<u64>,
     /// The faces tessellated (and planned), with their figures.
     pub faces: Vec<FaceInfo>,
+    /// Whether `faces` were chosen by [`load`] as the top of a closed solid (no selection given).
+    pub top_of_solid: bool,
     /// Millimetres per file unit, and the unit's name.
     pub unit_mm: f64,
     pub unit: String,
@@ -188,6 +190,12 @@ pub fn tessellate_model(
 }
 
 /// STEP bytes → the planner's surface and the STEP report. `now` gives milliseconds.
+///
+/// Without a face selection, a file whose faces enclose a solid is planned on its top, as an STL
+/// solid is ([`mesh::extract`]), but by whole faces: those whose every facet faces the tool axis
+/// within the wall angle ([`MeshOptions`]), the largest set of them connected by shared edges
+/// ([`StepReport::top_of_solid`]). Whole faces keep the exact boundaries of the CAD model (a
+/// fillet down to a wall is left out rather than cut along a tessellation's zigzag).
 pub fn load(
     bytes: &[u8],
     o: &StepOptions,
@@ -195,9 +203,30 @@ pub fn load(
     now: &dyn Fn() -> f64,
 ) -> Result<StepOutput, StepError> {
     let (model, tess, [read_ms, tessellate_ms]) = read_and_tessellate(bytes, o, now)?;
-    let selected: Vec<u64> = tess.faces.iter().map(|f| f.id).collect();
     let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
     let out = mesh::from_triangles(&trimesh, mesh_options)?;
+    if o.faces.is_none() && out.report.closed {
+        let top = top_faces(&tess, mesh_options)?;
+        let o = StepOptions { faces: Some(top), ..o.clone() };
+        let (tess, more_ms) = tessellate_model(&model, &o, now)?;
+        let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
+        let out = mesh::from_triangles(&trimesh, mesh_options)?;
+        let mut loaded = one_surface(&model, tess, out, &o, [read_ms, tessellate_ms + more_ms])?;
+        loaded.step.top_of_solid = true;
+        return Ok(loaded);
+    }
+    one_surface(&model, tess, out, o, [read_ms, tessellate_ms])
+}
+
+/// The output of `tess` meshed as `out`, checked to be one open surface of all its facets.
+fn one_surface(
+    model: &Model,
+    tess: Tessellation,
+    out: MeshOutput,
+    o: &StepOptions,
+    [read_ms, tessellate_ms]: [f64; 2],
+) -> Result<StepOutput, StepError> {
+    let selected: Vec<u64> = tess.faces.iter().map(|f| f.id).collect();
     let r = &out.report;
     let reason = if r.closed {
         Some("they enclose a solid".to_string())
@@ -214,6 +243,7 @@ pub fn load(
     let step = StepReport {
         faces_in_file: model.faces.iter().map(|f| f.id).collect(),
         faces: tess.faces,
+        top_of_solid: false,
         unit_mm: model.unit_mm,
         unit: model.unit_name.clone(),
         chordal_tol_mm: o.chordal_tol_mm,
@@ -223,4 +253,63 @@ pub fn load(
         tessellate_ms,
     };
     Ok(StepOutput { mesh: out, step, face_of_triangle: tess.face_of_triangle })
+}
+
+/// The faces of a closed tessellation that face the tool: every facet's outward normal within
+/// the wall angle of the axis; of those, the largest set (by area) connected through shared
+/// edges, in id order.
+fn top_faces(tess: &Tessellation, mesh_options: &MeshOptions) -> Result<Vec<u64>, StepError> {
+    let axis = mesh_options.tool_axis.normalize();
+    let cos_wall = crate::num::cos(mesh_options.wall_angle_deg.to_radians());
+    let corners = |t: &[u32; 3]| t.map(|v| tess.positions[v as usize]);
+    // Outward: the facets' signed volume is positive (a solid written inside out is turned).
+    let volume: f64 = tess
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = corners(t);
+            a.dot(b.cross(c))
+        })
+        .sum();
+    let outward = if volume < 0.0 { -1.0 } else { 1.0 };
+    let mut faces_tool = std::collections::BTreeMap::new();
+    for (t, &face) in tess.triangles.iter().zip(&tess.face_of_triangle) {
+        let [a, b, c] = corners(t);
+        let n = outward * (b - a).cross(c - a).normalize_or_zero();
+        let ok = faces_tool.entry(face).or_insert(true);
+        *ok &= n.dot(axis) >= cos_wall;
+    }
+    let facing: Vec<&FaceInfo> = tess.faces.iter().filter(|f| faces_tool.get(&f.id) == Some(&true)).collect();
+    let index: std::collections::BTreeMap<u64, usize> = facing.iter().enumerate().map(|(i, f)| (f.id, i)).collect();
+    // Connected sets by shared edges, the largest by area (the first in id order on a tie).
+    let mut set = vec![usize::MAX; facing.len()];
+    let mut best: (f64, usize) = (-1.0, 0);
+    for start in 0..facing.len() {
+        if set[start] != usize::MAX {
+            continue;
+        }
+        let (mut stack, mut area) = (vec![start], 0.0);
+        set[start] = start;
+        while let Some(i) = stack.pop() {
+            area += facing[i].area_mm2;
+            for n in &facing[i].adjacent {
+                if let Some(&j) = index.get(n) {
+                    if set[j] == usize::MAX {
+                        set[j] = start;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        if area > best.0 {
+            best = (area, start);
+        }
+    }
+    if facing.is_empty() {
+        return Err(StepError::Mesh(mesh::MeshError::NothingFacesTool {
+            axis: axis.to_array(),
+            wall_angle_deg: mesh_options.wall_angle_deg,
+        }));
+    }
+    Ok(facing.iter().zip(&set).filter(|(_, &s)| s == best.1).map(|(f, _)| f.id).collect())
 }

@@ -177,6 +177,8 @@ pub struct Planner {
     core: Option<Core>,
     last_map: Option<SlitMap>,
     last_plan: Option<Plan>,
+    /// STEP input: the faces the part is made of (the selection, or the top of a solid).
+    step_faces: Option<Vec<u64>>,
 }
 
 /// Plan options as the page passes them (camelCase, all optional; unknown fields are an error).
@@ -331,7 +333,7 @@ impl Planner {
         init();
         let options = JsMeshOptions::parse(options)?;
         let output = mesh::load_with_progress(stl, &options, &mut progress(&on_progress)).map_err(js_err)?;
-        Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
+        Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None, step_faces: None })
     }
 
     /// Reads a STEP file (its selected faces, tessellated to the chordal tolerance) instead of
@@ -342,8 +344,16 @@ impl Planner {
         init();
         let options = JsMeshOptions::parse(options)?;
         let step_options = JsStepOptions::parse(step_options)?;
-        let output = crate::step::load(step, &step_options, &options, &now).map_err(js_err)?.mesh;
-        Ok(Planner { output: Some(output), core: None, last_map: None, last_plan: None })
+        let loaded = crate::step::load(step, &step_options, &options, &now).map_err(js_err)?;
+        let step_faces = Some(loaded.step.faces.iter().map(|f| f.id).collect());
+        Ok(Planner { output: Some(loaded.mesh), core: None, last_map: None, last_plan: None, step_faces })
+    }
+
+    /// STEP input: the ids of the faces the part is made of (the selection asked for, or, for a
+    /// solid opened without one, its top faces); `undefined` for an STL.
+    #[wasm_bindgen(js_name = stepFaceIds)]
+    pub fn step_face_ids(&self) -> Option<Vec<f64>> {
+        self.step_faces.as_ref().map(|ids| ids.iter().map(|&id| id as f64).collect())
     }
 
     /// Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index;

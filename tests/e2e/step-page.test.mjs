@@ -4,7 +4,8 @@
 // error with the way out) and clicked again closes it; the download is byte-identical to
 // `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on;
 // the ball-end spiral refuses the band's walls (undercuts for a 3-axis tool) and plans a block of
-// faces picked from a grid of B-spline faces, the same program as `slitpath plan --faces`.
+// faces picked from a grid of B-spline faces, the same program as `slitpath plan --faces`; a
+// closed solid opened without a selection plans on its top face.
 // The tests share one page and run in order.
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
@@ -136,5 +137,16 @@ describe("STEP input on the page", { concurrency: false }, () => {
     const [fromPage, fromCli] = [readFileSync(fromPageFile), readFileSync(cliFile)];
     assert.ok(fromCli.length > 10_000, "the CLI wrote a program");
     assert.ok(fromPage.equals(fromCli), `page ${fromPage.length} bytes, CLI ${fromCli.length} bytes: they differ`);
+  });
+
+  it("plans the top of a STEP solid opened without a selection, by whole faces", async () => {
+    const file = join(output, "field_block.step");
+    cli("fixture", "step:field_block", "-o", file);
+    assert.equal(await replan(() => page.getByTestId("stl-input").setInputFiles(file)), "planned", await page.getByTestId("status-detail").textContent());
+    const boxes = await page.evaluate(() => document.querySelectorAll("[data-testid^=face-][type=checkbox]").length);
+    assert.equal(boxes, 6, "all six faces of the solid listed");
+    assert.deepEqual(await ticked(), [50], "only the B-spline top selected");
+    const [max, h] = (await metric("metric-max-scallop")).match(/[\d.]+/g).map(Number);
+    assert.ok(max > 0 && max <= h, `max scallop ≤ h: ${max} / ${h}`);
   });
 });

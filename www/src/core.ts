@@ -291,6 +291,12 @@ export class Part {
     return this.planner.report() as MeshReport;
   }
 
+  /** STEP input: the faces the part is made of (the selection, or the top of a solid opened without one); `null` for an STL. */
+  stepFaces(): number[] | null {
+    const ids = this.planner.stepFaceIds();
+    return ids ? Array.from(ids) : null;
+  }
+
   surface(): SurfaceMesh {
     const vertices = this.planner.loopVertices();
     let start = 0;

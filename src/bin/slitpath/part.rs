@@ -22,6 +22,13 @@ pub fn load(
     let name = path.display();
     if is_step(path, &bytes) {
         let out = step::load(&bytes, step_options, mesh_options, now).map_err(|e| format!("{name}: {e}"))?;
+        if out.step.top_of_solid {
+            let ids: Vec<String> = out.step.faces.iter().map(|f| format!("#{}", f.id)).collect();
+            eprintln!(
+                "note: {name}: its faces enclose a solid; planning its top, faces {} (choose others with --faces)",
+                ids.join(",")
+            );
+        }
         Ok((out.mesh, Some(out.step)))
     } else {
         if step_options.faces.is_some() {

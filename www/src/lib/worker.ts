@@ -157,7 +157,7 @@ async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions
     w: previewW,
     locator: null,
   };
-  const stepIds = isStepPart ? (stepOptions.faces ?? stepFile?.faces.map((f) => f.id) ?? null) : null;
+  const stepIds = isStepPart ? part.stepFaces() : null;
   const loaded: LoadedPart = {
     name,
     report: part.report(),
