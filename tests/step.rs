@@ -306,3 +306,51 @@ fn a_closed_solid_without_a_selection_is_planned_on_its_top_faces() {
     let v = p.report.verify.as_ref().expect("verified");
     assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
 }
+
+/// A dome as CAD writes it (a sphere face bounded by a circle and a VERTEX_LOOP at its pole) was
+/// refused ("the loop winds round the sphere"). It is closed at the pole by a fan round a small
+/// circle: every vertex on the sphere, one at the pole, within the chordal tolerance, one open
+/// disc, and it plans within h.
+#[test]
+fn a_dome_closed_by_a_vertex_loop_at_its_pole_tessellates_and_plans() {
+    let (r, angle) = fx::SPHERE_CAP;
+    let text = fx::sphere_cap();
+    let o = StepOptions::default();
+    let (model, t) = tess(&text, &o);
+    assert_eq!(model.faces[0].vertex_loops, vec![DVec3::new(0.0, 0.0, r)]);
+    assert!(t.positions.iter().all(|p| (p.length() - r).abs() < 1e-9), "every vertex on the sphere");
+    assert!(t.positions.iter().any(|p| (*p - DVec3::new(0.0, 0.0, r)).length() < 1e-12), "a vertex at the pole");
+    assert!(t.chordal_error_mm <= o.chordal_tol_mm, "chordal error {}", t.chordal_error_mm);
+    let exact = std::f64::consts::TAU * r * r * (1.0 - angle.to_radians().cos());
+    let area = t.faces[0].area_mm2;
+    assert!(area < exact && area > exact * (1.0 - 1e-3), "facets {area} mm², sphere {exact} mm²");
+    let dense = dense_chordal(&t, &|p| (p.length() - r).abs());
+    assert!(dense <= o.chordal_tol_mm, "dense chordal error {dense} mm");
+
+    let out = step::load(text.as_bytes(), &o, &MeshOptions::default(), &|| 0.0).unwrap();
+    assert_eq!(out.mesh.surface.loops.len(), 1);
+    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
+    let h = 0.02;
+    let options =
+        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
+}
+
+/// The same closing at a cone's apex: every vertex on the cone, one at the apex, the lateral area.
+#[test]
+fn a_cone_closed_by_a_vertex_loop_at_its_apex_tessellates() {
+    let (r, angle) = fx::CONE_NOSE;
+    let apex_z = r / angle.to_radians().tan();
+    let (_, t) = tess(&fx::cone_nose(), &StepOptions::default());
+    let off_cone = |p: &DVec3| (DVec2::new(p.x, p.y).length() - r * (1.0 - p.z / apex_z)).abs();
+    assert!(t.positions.iter().all(|p| off_cone(p) < 1e-9), "every vertex on the cone");
+    assert!(t.positions.iter().any(|p| (*p - DVec3::new(0.0, 0.0, apex_z)).length() < 1e-12), "a vertex at the apex");
+    let exact = std::f64::consts::PI * r * r / angle.to_radians().sin();
+    let area = t.faces[0].area_mm2;
+    assert!(area < exact && area > exact * (1.0 - 1e-3), "facets {area} mm², cone {exact} mm²");
+    let out =
+        step::load(fx::cone_nose().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
+    assert_eq!(out.mesh.surface.loops.len(), 1);
+}

@@ -2,7 +2,8 @@
 //! 3D curves and end vertices, in millimetres.
 //!
 //! Read: ADVANCED_FACE (and FACE_SURFACE) with FACE_OUTER_BOUND / FACE_BOUND of EDGE_LOOPs
-//! (a VERTEX_LOOP, e.g. a cone's apex, bounds nothing and is skipped); ORIENTED_EDGE, EDGE_CURVE,
+//! (a VERTEX_LOOP, a sphere's pole or a cone's apex, is kept as a point the tessellator closes
+//! the face at); ORIENTED_EDGE, EDGE_CURVE,
 //! VERTEX_POINT; surfaces PLANE, CYLINDRICAL_, CONICAL_, SPHERICAL_, TOROIDAL_SURFACE and
 //! B_SPLINE_SURFACE_WITH_KNOTS (simple or complex, RATIONAL_B_SPLINE_SURFACE too); curves LINE,
 //! CIRCLE, ELLIPSE, B_SPLINE_CURVE_WITH_KNOTS (rational too), SURFACE_CURVE / SEAM_CURVE (their 3D
@@ -35,6 +36,8 @@ pub struct Face {
     /// The face normal is the surface's (`true`) or its opposite.
     pub same_sense: bool,
     pub bounds: Vec<Bound>,
+    /// Points bounding the face alone (VERTEX_LOOPs: a sphere's pole, a cone's apex), mm.
+    pub vertex_loops: Vec<DVec3>,
 }
 
 #[derive(Clone, Debug)]
@@ -104,6 +107,7 @@ impl Reader<'_> {
         let surface = self.surface(surface_id)?;
         let same_sense = p.boolean(3)?;
         let mut bounds = Vec::new();
+        let mut vertex_loops = Vec::new();
         for b in p.refs(1)? {
             let e = self.get(id, b)?;
             let outer = e.record("FACE_OUTER_BOUND").is_some();
@@ -112,7 +116,11 @@ impl Reader<'_> {
             };
             let loop_id = Params::new(b, rec, 3)?.reference(1)?;
             let l = self.get(b, loop_id)?;
-            if l.record("VERTEX_LOOP").is_some() {
+            if let Some(vl) = l.record("VERTEX_LOOP") {
+                let v = Params::new(loop_id, vl, 2)?.reference(1)?;
+                let ve = self.get(loop_id, v)?;
+                let vr = ve.record("VERTEX_POINT").ok_or_else(|| bad(v, "not a VERTEX_POINT"))?;
+                vertex_loops.push(self.point(Params::new(v, vr, 2)?.reference(1)?)?);
                 continue;
             }
             let Some(lrec) = l.record("EDGE_LOOP") else {
@@ -138,7 +146,7 @@ impl Reader<'_> {
         if bounds.is_empty() {
             return Err(bad(id, "the face has no edge loop"));
         }
-        Ok(Face { id, surface_id, surface, same_sense, bounds })
+        Ok(Face { id, surface_id, surface, same_sense, bounds, vertex_loops })
     }
 
     fn edge(&self, id: u64, vertices: &mut BTreeMap<u64, DVec3>) -> Result<Edge, StepError> {

@@ -54,9 +54,20 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
     };
     let diagonal = {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for p in model.vertices.values() {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
+        let mut add = |p: DVec3| {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        };
+        model.vertices.values().for_each(|p| add(*p));
+        // A closed edge (a full circle) has one vertex, a VERTEX_LOOP bounds by a point: without
+        // their points a dome's box is a point.
+        for f in &model.faces {
+            f.vertex_loops.iter().for_each(|p| add(*p));
+        }
+        for edge in model.edges.values().filter(|e| e.start == e.end) {
+            let a = model.vertices[&edge.start];
+            let (t0, t1) = edge.curve.span(a, a, true);
+            (0..8).for_each(|k| add(edge.curve.point(t0 + (t1 - t0) * k as f64 / 8.0)));
         }
         (hi - lo).length().max(1e-9)
     };
@@ -260,6 +271,31 @@ fn mesh_face(
         loops.push((b.outer, (start as u32..uv.len() as u32).collect()));
         winding.push((b.id, turns));
     }
+    // A cap round a pole (a sphere or cone face bounded by one loop winding round it and a
+    // VERTEX_LOOP at the pole): a small circle round the pole becomes the band's second loop, and
+    // the disc inside it a fan of triangles to the pole (see `pole_circle`).
+    let mut pole_fan: Option<(DVec3, Vec<u32>)> = None;
+    {
+        let wound: Vec<usize> = (0..loops.len()).filter(|&k| winding[k].1 != [0, 0]).collect();
+        if let ([k], [pole]) = (wound.as_slice(), f.vertex_loops.as_slice()) {
+            let turns = winding[*k].1;
+            let d = if turns[0] != 0 { 0 } else { 1 };
+            if turns[d].abs() == 1 && turns[1 - d] == 0 {
+                let sense = -turns[d] as f64;
+                let ring =
+                    pole_circle(s, *pole, &loops[*k].1, d, sense, &mut uv, &mut global, positions, tol, max_edge)
+                        .ok_or_else(|| StepError::Entity {
+                            id: f.id,
+                            message: format!("the {} has no pole at its VERTEX_LOOP's point", s.kind()),
+                        })?;
+                pole_fan = Some((*pole, ring.clone()));
+                let mut t = [0i64; 2];
+                t[d] = -turns[d];
+                loops.push((false, ring));
+                winding.push((f.id, t));
+            }
+        }
+    }
     // Loops that wind round the surface (Parasolid writes a cylinder band as two circles and no
     // seam): exactly two, once each in opposite senses round the same direction, are joined by a
     // synthetic seam into one outer loop; anything else is refused.
@@ -366,7 +402,94 @@ fn mesh_face(
         (x, su.cross(sv).normalize_or_zero())
     };
     let err = triangulate::refine(&mut dom, &mut tris, tol, max_edge, budget, &eval).map_err(fail)?;
+    if let Some((pole, ring)) = pole_fan {
+        // The pole as a local vertex after the refinement's (the caller gives it a position), its
+        // fan wound as the band's triangles are (counter-clockwise in the parameters: along
+        // Su × Sv).
+        let at = dom.p.len() as u32;
+        dom.uv.push(dom.uv[ring[0] as usize]);
+        dom.q.push(dom.q[ring[0] as usize]);
+        dom.p.push(pole);
+        for i in 0..ring.len() {
+            let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+            let n = (dom.p[a as usize] - pole).cross(dom.p[b as usize] - pole);
+            let along = s.normal(dom.uv[a as usize]);
+            tris.push(if n.dot(along) >= 0.0 { [at, a, b] } else { [at, b, a] });
+        }
+    }
     Ok((tris, global, dom, err))
+}
+
+/// The circle round the pole `pole` of `s` (in direction 1 − `d`, the loop `cap` winding round
+/// direction `d`) that a fan to the pole stands for within the tolerance: as far from the pole
+/// as the fan's sag allows, at most `max_edge`; its samples (new positions) go round a full turn
+/// in the sense `sense` (±1) as a loop of local indices, in the order they were made. `None` when the surface does not
+/// shrink to `pole` there.
+#[allow(clippy::too_many_arguments)]
+fn pole_circle(
+    s: &super::geom::Surface,
+    pole: DVec3,
+    cap: &[u32],
+    d: usize,
+    sense: f64,
+    uv: &mut Vec<DVec2>,
+    global: &mut Vec<u32>,
+    positions: &mut Vec<DVec3>,
+    tol: f64,
+    max_edge: f64,
+) -> Option<Vec<u32>> {
+    let e = 1 - d;
+    let vp = s.invert(pole, None)[e];
+    let mean = cap.iter().map(|&i| uv[i as usize][e]).sum::<f64>() / cap.len() as f64;
+    let at = |u: f64, v: f64| {
+        let mut w = DVec2::ZERO;
+        w[d] = u;
+        w[e] = v;
+        w
+    };
+    // The surface must shrink to the pole along every direction.
+    if (0..8).any(|k| (s.point(at(k as f64 * TAU / 8.0, vp)) - pole).length() > tol) {
+        return None;
+    }
+    // Halve the circle's distance from the pole until the fan's triangles lie within the
+    // tolerance of the surface (their midpoints against the surface's) and are short enough.
+    let mut dv = 0.5 * (mean - vp);
+    for _ in 0..60 {
+        let ok = (0..16).all(|k| {
+            let u = k as f64 * TAU / 16.0;
+            let (c, m) = (s.point(at(u, vp + dv)), s.point(at(u, vp + 0.5 * dv)));
+            (c - pole).length() <= max_edge && (m - 0.5 * (c + pole)).length() <= 0.5 * tol
+        });
+        if ok {
+            break;
+        }
+        dv *= 0.5;
+    }
+    let v = vp + dv;
+    let u0 = uv[cap[0] as usize][d];
+    let mut n = 8usize;
+    loop {
+        let ok = (0..n).all(|i| {
+            let (a, b) = (u0 + TAU * i as f64 / n as f64, u0 + TAU * (i + 1) as f64 / n as f64);
+            let (p0, p1, pm) = (s.point(at(a, v)), s.point(at(b, v)), s.point(at(0.5 * (a + b), v)));
+            (p1 - p0).length() <= max_edge && (pm - 0.5 * (p0 + p1)).length() <= 0.5 * tol
+        });
+        if ok || n >= 1 << 12 {
+            break;
+        }
+        n *= 2;
+    }
+    Some(
+        (0..n)
+            .map(|i| {
+                let w = at(u0 + sense * TAU * i as f64 / n as f64, v);
+                positions.push(s.point(w));
+                uv.push(w);
+                global.push(positions.len() as u32 - 1);
+                uv.len() as u32 - 1
+            })
+            .collect(),
+    )
 }
 
 /// Joins loop `a` and loop `b`, which wind round direction `d` of the surface `wa` (±1) and
