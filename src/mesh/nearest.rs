@@ -118,59 +118,6 @@ impl FaceTree {
         false
     }
 
-    /// The leaves (node indices) whose boxes come within `margin` of the box `lo`–`hi`, in tree
-    /// order, into `out` (cleared first): the candidates of [`FaceTree::point_nearer_than_among`]
-    /// and [`FaceTree::segment_nearer_than_among`] for a run of nearby queries, gathered once
-    /// for all of them instead of walking the tree for each.
-    pub fn leaves_near(&self, lo: DVec3, hi: DVec3, margin: f64, out: &mut Vec<u32>) {
-        out.clear();
-        let (lo, hi) = (lo - DVec3::splat(margin), hi + DVec3::splat(margin));
-        let mut stack = Stack::new(0u32);
-        if !self.nodes.is_empty() {
-            stack.push(0);
-        }
-        while let Some(index) = stack.pop() {
-            let node = &self.nodes[index as usize];
-            if node.lo.cmpgt(hi).any() || node.hi.cmplt(lo).any() {
-                continue;
-            }
-            if node.count > 0 {
-                out.push(index);
-            } else {
-                stack.push(node.right);
-                stack.push(index + 1);
-            }
-        }
-    }
-
-    /// [`FaceTree::point_nearer_than`] over the leaves `leaves` only: the same answer, bit for
-    /// bit, when they hold every leaf within `limit` of `p` (each is pruned by the same test as
-    /// in the walk, and its faces tested alike; the answer does not depend on their order).
-    pub fn point_nearer_than_among(&self, leaves: &[u32], p: DVec3, limit: f64) -> bool {
-        let limit2 = limit * limit;
-        // The walk's prune, NaN included.
-        let pruned = |node: &Node| node.distance2(p) > limit2;
-        leaves.iter().map(|&i| &self.nodes[i as usize]).any(|node| {
-            !pruned(node)
-                && (node.start..node.start + node.count)
-                    .any(|slot| self.slot_nearer_than(slot as usize, p, limit, limit2))
-        })
-    }
-
-    /// [`FaceTree::segment_nearer_than`] over the leaves `leaves` only, as
-    /// [`FaceTree::point_nearer_than_among`]: the same answer when they hold every leaf within
-    /// `limit` + |ab|/2 of the segment's midpoint.
-    pub fn segment_nearer_than_among(&self, leaves: &[u32], a: DVec3, b: DVec3, limit: f64) -> bool {
-        let (mid, reach) = segment_reach(a, b, limit);
-        let reach2 = reach * reach;
-        let pruned = |node: &Node| node.distance2(mid) > reach2;
-        leaves.iter().map(|&i| &self.nodes[i as usize]).any(|node| {
-            !pruned(node)
-                && (node.start..node.start + node.count)
-                    .any(|slot| self.slot_segment_nearer_than(slot as usize, a, b, limit))
-        })
-    }
-
     /// Whether the face in slot `slot` is nearer than `limit` (squared `limit2`) to `p`.
     #[inline]
     fn slot_nearer_than(&self, slot: usize, p: DVec3, limit: f64, limit2: f64) -> bool {
@@ -362,7 +309,7 @@ impl FaceTree {
 /// The midpoint of the segment `ab` and the distance from it within which a face can come
 /// nearer than `limit` to the segment (`limit` + |ab|/2): what [`FaceTree::segment_nearer_than`]
 /// prunes the tree's boxes by.
-pub fn segment_reach(a: DVec3, b: DVec3, limit: f64) -> (DVec3, f64) {
+fn segment_reach(a: DVec3, b: DVec3, limit: f64) -> (DVec3, f64) {
     (0.5 * (a + b), limit + 0.5 * a.distance(b))
 }
 
@@ -570,38 +517,6 @@ mod tests {
             }
         }
         assert!(near > 50 && far > 50, "near {near}, far {far}");
-    }
-
-    #[test]
-    fn queries_among_a_runs_leaves_answer_as_the_walk() {
-        // Runs of nearby points (as a toolpath's centres), the leaves gathered once per run: the
-        // point and segment answers must be the walk's, many of them at about the limit.
-        let mesh = fixtures::saddle_2_holes();
-        let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
-        let mut rng = SplitMix64(7);
-        let mut next = || rng.unit();
-        let (lo, hi) = crate::mesh::weld::bounding_box(&mesh.positions);
-        let (mut leaves, mut answers) = (Vec::new(), [0usize; 2]);
-        for _ in 0..200 {
-            let start = lo + (hi - lo) * DVec3::new(next(), next(), next()) + DVec3::Z * (2.0 * next() - 0.5);
-            let step = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.4;
-            let run: Vec<DVec3> = (0..32).map(|k| start + step * k as f64).collect();
-            let limit = 0.5 + next();
-            let (rlo, rhi) = run.iter().fold((run[0], run[0]), |(a, b), &p| (a.min(p), b.max(p)));
-            tree.leaves_near(rlo, rhi, 1.001 * limit, &mut leaves);
-            for &p in &run {
-                let walk = tree.point_nearer_than(p, limit);
-                assert_eq!(tree.point_nearer_than_among(&leaves, p, limit), walk, "{p:?}");
-                answers[walk as usize] += 1;
-            }
-            let longest = step.length();
-            tree.leaves_near(rlo, rhi, 1.001 * (limit + 0.5 * longest), &mut leaves);
-            for w in run.windows(2) {
-                let walk = tree.segment_nearer_than(w[0], w[1], limit);
-                assert_eq!(tree.segment_nearer_than_among(&leaves, w[0], w[1], limit), walk, "{w:?}");
-            }
-        }
-        assert!(answers[0] > 500 && answers[1] > 500, "far {}, near {}", answers[0], answers[1]);
     }
 
     #[test]

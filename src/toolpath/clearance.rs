@@ -74,11 +74,10 @@ pub fn clear_facets(
         !short(ca, cb) && faces.segment_nearer_than(ca, cb, limit)
     };
 
-    // The move ending at centre `i`, from `prev` to `b`, when it dips into a facet (the leaves
-    // `leaves` hold every one near it): its points, split at cleared midpoints, `b` last.
-    let split_move = |prev: (DVec3, DVec3), b: (DVec3, DVec3), leaves: &[u32], i: usize| {
-        let (ca, cb) = (centre(prev), centre(b));
-        if short(ca, cb) || !faces.segment_nearer_than_among(leaves, ca, cb, limit) {
+    // The move ending at centre `i`, from `prev` to `b`, when it dips into a facet: its points,
+    // split at cleared midpoints, `b` last.
+    let split_move = |prev: (DVec3, DVec3), b: (DVec3, DVec3), i: usize| {
+        if !dips(prev, b) {
             return None;
         }
         let mut report = Clearance::default();
@@ -105,50 +104,22 @@ pub fn clear_facets(
         }
         Some((i, inserted, report))
     };
-    // Each centre on its own (in chunks, in parallel): off its own face first; one test then
-    // confirms that no other facet is within R of it (most centres need no more), against the
-    // leaves near the chunk, gathered once for its centres (see `FaceTree::leaves_near`).
-    let keep = ball.keep_mm() * (1.0 - CLEAR_REL);
-    let cleared: Vec<((DVec3, DVec3), Clearance)> = crate::par::each(cc.len().div_ceil(CHUNK), |k| {
-        let range = k * CHUNK..((k + 1) * CHUNK).min(cc.len());
-        let first: Vec<((DVec3, DVec3), Clearance)> = range
-            .clone()
-            .map(|i| {
-                let mut report = Clearance::default();
-                (clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report), report)
-            })
-            .collect();
-        let (lo, hi) = bounds(first.iter().map(|(b, _)| centre(*b)));
-        let mut leaves = Vec::new();
-        faces.leaves_near(lo, hi, keep * MARGIN, &mut leaves);
-        range
-            .zip(first)
-            .map(|(i, (b, report))| {
-                if i == 0 || !faces.point_nearer_than_among(&leaves, centre(b), keep) {
-                    return (b, report);
-                }
-                let mut report = Clearance::default();
-                (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
-            })
-            .collect::<Vec<_>>()
-    })
-    .into_iter()
-    .flatten()
-    .collect();
-    // Then each move between two cleared centres (in chunks, in parallel, against the leaves
-    // near the chunk's moves): the points to insert before its end, split at cleared midpoints
-    // while it dips into a facet (none for most moves).
+    // Each centre on its own (in parallel): off its own face first; one traversal then confirms
+    // that no other facet is within R of it (most centres need no more).
+    let cleared = crate::par::each(cc.len(), |i| {
+        let mut report = Clearance::default();
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report);
+        if i == 0 || !faces.point_nearer_than(centre(b), ball.keep_mm() * (1.0 - CLEAR_REL)) {
+            return (b, report);
+        }
+        let mut report = Clearance::default();
+        (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
+    });
+    // Then each move between two cleared centres (in chunks, in parallel): the points of those
+    // that dip into a facet (most do not, and allocate nothing).
     let moves = crate::par::each(cc.len().div_ceil(CHUNK), |k| {
         let range = k * CHUNK..((k + 1) * CHUNK).min(cc.len());
-        let ends = || cleared[range.start.max(1) - 1..range.end].iter().map(|(b, _)| centre(*b));
-        let (lo, hi) = bounds(ends());
-        let longest = ends().zip(ends().skip(1)).map(|(a, b)| a.distance(b)).fold(0.0, f64::max);
-        let mut leaves = Vec::new();
-        faces.leaves_near(lo, hi, (limit + 0.5 * longest) * MARGIN, &mut leaves);
-        range
-            .filter(|&i| i > 0)
-            .filter_map(|i| split_move(cleared[i - 1].0, cleared[i].0, &leaves, i))
-            .collect::<Vec<_>>()
+        range.filter(|&i| i > 0).filter_map(|i| split_move(cleared[i - 1].0, cleared[i].0, i)).collect::<Vec<_>>()
     });
     let mut report = Clearance::default();
     for (_, r) in &cleared {
@@ -184,19 +155,8 @@ impl Clearance {
     }
 }
 
-/// Centres handed to one job of [`clear_facets`]: their tests share one gathering of the
-/// facet tree's leaves near them (a ball's neighbourhood holds about 30 leaves of the 40k
-/// panel, a chunk's 50–60).
-const CHUNK: usize = 32;
-
-/// The leaves gathered for a chunk reach this much farther than its queries need, so rounding
-/// cannot leave out one a query's own walk would visit.
-const MARGIN: f64 = 1.001;
-
-/// The bounding box of `points` (empty: an inverted box that meets nothing).
-fn bounds(points: impl Iterator<Item = DVec3>) -> (DVec3, DVec3) {
-    points.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)))
-}
+/// Moves handed to one job of [`clear_facets`]'s second pass.
+const CHUNK: usize = 256;
 
 /// One centre `p + R·n` cleared: the new contact and normal.
 fn clear_one(
