@@ -93,7 +93,19 @@ impl FaceTree {
         let mut walk = Walk::new(&self.nodes);
         while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(p) > limit2) {
             for slot in slots {
-                if self.slot_nearer_than(slot, p, limit, limit2) {
+                let (n, offset) = self.planes[slot];
+                let d = n.dot(p) - offset;
+                if d * d >= limit2 {
+                    continue;
+                }
+                // Beyond the face's bounding sphere by the limit: beyond the face.
+                let (m, r) = self.spheres[slot];
+                if m.distance_squared(p) >= (limit + r) * (limit + r) {
+                    continue;
+                }
+                let [a, b, c] = self.corners[slot];
+                let bary = closest_on_triangle(p, a, b, c);
+                if (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(p) < limit2 {
                     return true;
                 }
             }
@@ -105,48 +117,26 @@ impl FaceTree {
     /// ball centre). Exact (segment–triangle distance), pruned by the distance from the
     /// segment's midpoint to a node's box less half its length.
     pub fn segment_nearer_than(&self, a: DVec3, b: DVec3, limit: f64) -> bool {
-        let (mid, reach) = segment_reach(a, b, limit);
-        let reach2 = reach * reach;
+        let mid = 0.5 * (a + b);
+        let half = 0.5 * a.distance(b);
+        let reach = limit + half;
+        let (limit2, reach2) = (limit * limit, reach * reach);
         let mut walk = Walk::new(&self.nodes);
         while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(mid) > reach2) {
             for slot in slots {
-                if self.slot_segment_nearer_than(slot, a, b, limit) {
+                let (n, offset) = self.planes[slot];
+                let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
+                // Both ends on one side of the plane and beyond the limit: the face too.
+                if (da * db > 0.0 && num::min(da.abs(), db.abs()) >= limit) || self.sphere_beyond(slot, a, b, limit) {
+                    continue;
+                }
+                let [p, q, r] = self.corners[slot];
+                if segment_triangle_nearer_than(a, b, p, q, r, limit, limit2) {
                     return true;
                 }
             }
         }
         false
-    }
-
-    /// Whether the face in slot `slot` is nearer than `limit` (squared `limit2`) to `p`.
-    #[inline]
-    fn slot_nearer_than(&self, slot: usize, p: DVec3, limit: f64, limit2: f64) -> bool {
-        let (n, offset) = self.planes[slot];
-        let d = n.dot(p) - offset;
-        if d * d >= limit2 {
-            return false;
-        }
-        // Beyond the face's bounding sphere by the limit: beyond the face.
-        let (m, r) = self.spheres[slot];
-        if m.distance_squared(p) >= (limit + r) * (limit + r) {
-            return false;
-        }
-        let [a, b, c] = self.corners[slot];
-        let bary = closest_on_triangle(p, a, b, c);
-        (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(p) < limit2
-    }
-
-    /// Whether the face in slot `slot` comes nearer than `limit` to the segment `ab`.
-    #[inline]
-    fn slot_segment_nearer_than(&self, slot: usize, a: DVec3, b: DVec3, limit: f64) -> bool {
-        let (n, offset) = self.planes[slot];
-        let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
-        // Both ends on one side of the plane and beyond the limit: the face too.
-        if (da * db > 0.0 && num::min(da.abs(), db.abs()) >= limit) || self.sphere_beyond(slot, a, b, limit) {
-            return false;
-        }
-        let [p, q, r] = self.corners[slot];
-        segment_triangle_nearer_than(a, b, p, q, r, limit, limit * limit)
     }
 
     /// The nearest point of the mesh to `p` closer than `max_distance`, or `None`.
@@ -304,13 +294,6 @@ impl FaceTree {
         let bary = closest_on_triangle(p, a, b, c);
         (bary, a * bary[0] + b * bary[1] + c * bary[2])
     }
-}
-
-/// The midpoint of the segment `ab` and the distance from it within which a face can come
-/// nearer than `limit` to the segment (`limit` + |ab|/2): what [`FaceTree::segment_nearer_than`]
-/// prunes the tree's boxes by.
-fn segment_reach(a: DVec3, b: DVec3, limit: f64) -> (DVec3, f64) {
-    (0.5 * (a + b), limit + 0.5 * a.distance(b))
 }
 
 /// Squared distance between segment `pq` and triangle `abc`: 0 when the segment pierces the
