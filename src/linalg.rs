@@ -277,15 +277,29 @@ impl Symbolic {
         self.sn_begin.len() - 1
     }
 
+    /// Number of values of L.
+    fn factor_len(&self) -> usize {
+        *self.val_ptr.last().expect("val_ptr is never empty")
+    }
+
     /// Left-looking supernodal LLᵀ of the lower-triangle values `a` (CSC order of `row_idx`).
     fn factorise(&self, a: &[f64]) -> Result<Vec<f64>, LinalgError> {
-        let mut l = zeros_written(*self.val_ptr.last().expect("val_ptr is never empty"));
+        let mut l = zeros_written(self.factor_len());
+        self.factorise_into(a, &mut l)?;
+        Ok(l)
+    }
+
+    /// [`Symbolic::factorise`] into `l` (of [`Symbolic::factor_len`] values, overwritten): a
+    /// refactorisation reuses the previous factor's memory (the 300k-face panel's optimise
+    /// held two factors of 220 MB each at its peak) and its pages (see [`zeros_written`]).
+    fn factorise_into(&self, a: &[f64], l: &mut [f64]) -> Result<(), LinalgError> {
+        l.fill(0.0);
         for (&pos, &v) in self.a_to_l.iter().zip(a) {
             l[pos] += v;
         }
         // Local row of a global (permuted) row in the current target supernode.
         let mut rel = vec![0u32; self.n];
-        let mut work = vec![0.0; self.max_update];
+        let mut work = vec![0.0; self.max_update.min(MAX_WORK)];
         for s in 0..self.n_supernodes() {
             let (b, e) = (self.sn_begin[s], self.sn_begin[s + 1]);
             let cols = (e - b) as usize;
@@ -323,41 +337,48 @@ impl Symbolic {
                     continue;
                 }
                 // W = L_d[k1.., :] · L_d[k1..k2, :]ᵀ (lower trapezoid), each entry summed over the
-                // columns of d in ascending order.
-                let w = &mut work[..m * k];
-                w.fill(0.0);
+                // columns of d in ascending order; in runs of its columns that fit the workspace
+                // (each entry's sum is the same whatever the runs).
                 let column = |t: usize| &ld[t * drows + first..(t + 1) * drows];
-                let mut t = 0;
-                while t + 4 <= dcols {
-                    let c = [column(t), column(t + 1), column(t + 2), column(t + 3)];
-                    for jj in 0..k {
-                        let f = [c[0][jj], c[1][jj], c[2][jj], c[3][jj]];
-                        add_products4(&mut w[jj * m + jj..(jj + 1) * m], c.map(|ci| &ci[jj..]), f);
+                let run = (work.len() / m).max(1);
+                for j0 in (0..k).step_by(run) {
+                    let j1 = (j0 + run).min(k);
+                    let w = &mut work[..m * (j1 - j0)];
+                    w.fill(0.0);
+                    // Column jj of W at (jj − j0)·m, its rows jj..m.
+                    let wcol = |jj: usize| (jj - j0) * m + jj..(jj - j0 + 1) * m;
+                    let mut t = 0;
+                    while t + 4 <= dcols {
+                        let c = [column(t), column(t + 1), column(t + 2), column(t + 3)];
+                        for jj in j0..j1 {
+                            let f = [c[0][jj], c[1][jj], c[2][jj], c[3][jj]];
+                            add_products4(&mut w[wcol(jj)], c.map(|ci| &ci[jj..]), f);
+                        }
+                        t += 4;
                     }
-                    t += 4;
-                }
-                for t in t..dcols {
-                    let c = column(t);
-                    for jj in 0..k {
-                        let f = c[jj];
-                        for (wv, &x) in w[jj * m + jj..(jj + 1) * m].iter_mut().zip(&c[jj..]) {
-                            *wv += x * f;
+                    for t in t..dcols {
+                        let c = column(t);
+                        for jj in j0..j1 {
+                            let f = c[jj];
+                            for (wv, &x) in w[wcol(jj)].iter_mut().zip(&c[jj..]) {
+                                *wv += x * f;
+                            }
                         }
                     }
-                }
-                for jj in 0..k {
-                    let tc = (dpat[k1 + jj] - b) as usize;
-                    let tcol = &mut target[tc * rows..(tc + 1) * rows];
-                    let wc = &w[jj * m..(jj + 1) * m];
-                    for ii in jj..m {
-                        tcol[rel[dpat[k1 + ii] as usize] as usize] -= wc[ii];
+                    for jj in j0..j1 {
+                        let tc = (dpat[k1 + jj] - b) as usize;
+                        let tcol = &mut target[tc * rows..(tc + 1) * rows];
+                        let wc = &w[(jj - j0) * m..(jj - j0 + 1) * m];
+                        for ii in jj..m {
+                            tcol[rel[dpat[k1 + ii] as usize] as usize] -= wc[ii];
+                        }
                     }
                 }
             }
             dense_llt_panel(target, rows, cols)
                 .map_err(|j| LinalgError::NotPositiveDefinite { pivot: b as usize + j })?;
         }
-        Ok(l)
+        Ok(())
     }
 
     /// Solves L Lᵀ y = y in the permuted numbering.
@@ -417,6 +438,10 @@ impl Symbolic {
         (b, cols, &self.pat[self.pat_ptr[s]..self.pat_ptr[s + 1]], &l[self.val_ptr[s]..self.val_ptr[s + 1]])
     }
 }
+
+/// The update workspace of [`Symbolic::factorise_into`] holds at most this many values (8 MiB):
+/// the largest update of the 300k-face panel's optimise took 250 MB in one block.
+const MAX_WORK: usize = 1 << 20;
 
 /// `len` zeros, written now. A zeroed allocation (what `vec![0.0; len]` gives) maps the shared
 /// zero page on first read, so a `+=` into it faults twice per page, the second time a
@@ -525,8 +550,10 @@ impl SparseCholesky {
         Ok(Self { symbolic, values })
     }
 
-    /// New numeric values with the same sparsity pattern (reuses the symbolic analysis).
-    /// On error the previous factorisation is kept.
+    /// New numeric values with the same sparsity pattern (reuses the symbolic analysis and the
+    /// factor's memory). A pattern mismatch keeps the previous factorisation; a failed
+    /// factorisation (not positive definite) loses it, and solves give NaN until a
+    /// refactorisation succeeds.
     pub fn refactor(&mut self, triplets: &[(usize, usize, f64)]) -> Result<(), LinalgError> {
         let csc = assemble_lower(self.symbolic.n, triplets)?;
         if csc.col_ptr != self.symbolic.col_ptr || csc.row_idx != self.symbolic.row_idx {
@@ -538,7 +565,15 @@ impl SparseCholesky {
                 ),
             });
         }
-        self.values = self.symbolic.factorise(&csc.values)?;
+        self.factorise_in_place(&csc.values)
+    }
+
+    /// The factor of `values` over the previous one's memory; empty when it fails.
+    fn factorise_in_place(&mut self, values: &[f64]) -> Result<(), LinalgError> {
+        let mut l = std::mem::take(&mut self.values);
+        l.resize(self.symbolic.factor_len(), 0.0);
+        self.symbolic.factorise_into(values, &mut l)?;
+        self.values = l;
         Ok(())
     }
 
@@ -562,7 +597,8 @@ impl SparseCholesky {
     }
 
     /// New numeric values with the same pattern, given as the stored lower entries of A in CSC
-    /// order ([`SparseCholesky::lower_slot`]). On error the previous factorisation is kept.
+    /// order ([`SparseCholesky::lower_slot`]). Non-finite values and a wrong length keep the
+    /// previous factorisation; a failed one loses it, as in [`SparseCholesky::refactor`].
     pub fn refactor_lower(&mut self, values: &[f64]) -> Result<(), LinalgError> {
         if values.len() != self.symbolic.row_idx.len() {
             return Err(LinalgError::PatternMismatch {
@@ -577,8 +613,7 @@ impl SparseCholesky {
             let col = self.symbolic.col_ptr.partition_point(|&p| p as usize <= k) - 1;
             return Err(LinalgError::NonFinite { row: self.symbolic.row_idx[k] as usize, col });
         }
-        self.values = self.symbolic.factorise(values)?;
-        Ok(())
+        self.factorise_in_place(values)
     }
 
     /// The elimination order used (`order[k]` = unknown eliminated at step k).
@@ -598,7 +633,7 @@ impl SparseCholesky {
 
     /// Number of stored entries of the factor L (supernode blocks, explicit zeros included).
     pub fn nnz_factor(&self) -> usize {
-        self.values.len()
+        self.symbolic.factor_len()
     }
 
     /// Multiply-adds of the numeric factorisation, Σ over columns of (entries below the diagonal)²
@@ -624,6 +659,11 @@ impl SparseCholesky {
     pub fn solve_in_place(&self, rhs: &mut [f64]) {
         let sym = &self.symbolic;
         assert_eq!(rhs.len(), sym.n, "right-hand side length must equal n");
+        if self.values.is_empty() {
+            // The last refactorisation failed (see `refactor`).
+            rhs.fill(f64::NAN);
+            return;
+        }
         let mut y: Vec<f64> = sym.perm.iter().map(|&o| rhs[o as usize]).collect();
         sym.solve_permuted(&self.values, &mut y);
         for (k, &o) in sym.perm.iter().enumerate() {

@@ -307,6 +307,8 @@ const MAX_CROSSINGS: usize = 24;
 /// Segments searched on each side of a point's angle for the distances that locate a cusp: the
 /// nearest centres of a point between two rings lie on its own meridian.
 const CUSP_SEGMENTS: usize = 3;
+// [`Cutter::side`]'s "cut" relies on the local test searching those segments too.
+const _: () = assert!(CUSP_SEGMENTS <= LOCAL_SEGMENTS);
 
 /// Regula falsi steps locating a cusp along an edge ([`Cutter::add_cusps`]).
 const CUSP_STEPS: usize = 4;
@@ -480,9 +482,9 @@ impl RingLine {
     /// The squared distance from `q` to the segments within `window` of angle `theta`: the
     /// distance to the ring where its nearest centres are on the point's own meridian, as they
     /// almost always are (else an overestimate).
-    fn near_dist2(&self, q: DVec3, theta: f64, window: usize) -> f64 {
+    fn near_dist2(&self, q: DVec3, theta: f64, window: usize, hint: &mut usize) -> f64 {
         let mut best = f64::INFINITY;
-        let found = self.find_near(theta, window, |s| {
+        let found = self.find_near_from(theta, window, hint, |s| {
             best = num::min(best, s.dist2(q));
             false
         });
@@ -496,13 +498,34 @@ impl RingLine {
     /// nearest almost always is: its own, then one before and one after, …) until it returns
     /// `true`; whether it did. `None` for a ring of fewer than two centres.
     #[inline]
-    fn find_near(&self, theta: f64, window: usize, mut f: impl FnMut(&Segment) -> bool) -> Option<bool> {
+    fn find_near(&self, theta: f64, window: usize, f: impl FnMut(&Segment) -> bool) -> Option<bool> {
+        let mut hint = usize::MAX;
+        self.find_near_from(theta, window, &mut hint, f)
+    }
+
+    /// [`RingLine::find_near`], the segment at `theta` located from `hint` (the place of the
+    /// previous angle of a run along a line, updated) when it is still right: the cusp search
+    /// asks for a few nearby angles in turn, and this spares their binary searches.
+    #[inline]
+    fn find_near_from(
+        &self,
+        theta: f64,
+        window: usize,
+        hint: &mut usize,
+        mut f: impl FnMut(&Segment) -> bool,
+    ) -> Option<bool> {
         let n = self.centres.len();
         if n < 2 {
             return None;
         }
         let t = crate::num::rem_tau(theta);
-        let i = self.theta.partition_point(|&x| x <= t).clamp(1, n - 1) - 1;
+        // The partition point of `x <= t`, the one k with θ[k − 1] ≤ t < θ[k]: the hint when
+        // it is that k (the angles ascend, so the answer is the binary search's, bit for bit).
+        let k = *hint;
+        let fits = k <= n && (k == 0 || self.theta[k - 1] <= t) && (k == n || !(self.theta[k] <= t));
+        let k = if fits { k } else { self.theta.partition_point(|&x| x <= t) };
+        *hint = k;
+        let i = k.clamp(1, n - 1) - 1;
         let m = self.segments.len();
         if i >= window && i + window < m {
             let s = &self.segments[i - window..=i + window];
@@ -566,13 +589,19 @@ impl<'r> Cutter<'r> {
     }
 
     /// Which of the two rings is nearer the point of S^h over `p` (positive: the second, the
-    /// lower one), as a difference of distances, mm; `None` without two rings.
-    fn side(&self, &(p, n, _, theta): &GatePoint) -> Option<f64> {
+    /// lower one), as a difference of distances, mm, and whether that point is cut (as
+    /// [`Cutter::cuts`] would say: a segment found within R here is one that searches too);
+    /// `None` without two rings. `hints` carry the rings' segments at the previous point of a
+    /// run (see [`RingLine::find_near_from`]).
+    fn side(&self, &(p, n, _, theta): &GatePoint, hints: &mut [usize; 2]) -> Option<(f64, bool)> {
         let [upper, lower] = self.rings else { return None };
         let q = p + n * self.h_mm;
-        let (du, dl) =
-            (upper.near_dist2(q, theta, CUSP_SEGMENTS).sqrt(), lower.near_dist2(q, theta, CUSP_SEGMENTS).sqrt());
-        Some(du - dl)
+        let (du2, dl2) = (
+            upper.near_dist2(q, theta, CUSP_SEGMENTS, &mut hints[0]),
+            lower.near_dist2(q, theta, CUSP_SEGMENTS, &mut hints[1]),
+        );
+        let r2 = self.radius_mm * self.radius_mm;
+        Some((du2.sqrt() - dl2.sqrt(), du2 <= r2 || dl2 <= r2))
     }
 
     /// The cusps along the run of points `out[first..]` that [`line`] laid from `a` to `b`:
@@ -581,6 +610,9 @@ impl<'r> Cutter<'r> {
     /// to `out`. The scallop peaks in a narrow V there (its flanks slope by about √(2h/R)):
     /// points a fixed step apart pass up to step·√(h/2R) under it, more than h on coarse
     /// meshes (issue 34's sweep: 1.1–1.3 h between the gate's points on 3k–12k-face parts).
+    /// Points (laid or found) that the distances measured on the way show cut are dropped: the
+    /// caller's test of each point ([`Cutter::cuts`]) would drop them, and those distances
+    /// settle most of them.
     fn add_cusps(&self, a: End, b: End, first: usize, lift: Option<Lowered>, out: &mut Vec<GatePoint>) {
         if self.rings.len() != 2 {
             return;
@@ -600,23 +632,32 @@ impl<'r> Cutter<'r> {
             i => ((i - 1) as f64 + 0.5) / count as f64,
         };
         let laid = |out: &[GatePoint], i: usize| if i == 0 || i > count { at(u_of(i)) } else { out[first + i - 1] };
-        // Cusps found are pushed after the laid points: their indices hold.
-        let mut next = self.side(&laid(out, 0));
+        let mut hints = [usize::MAX; 2];
+        // Laid points not known to be cut are moved down to `kept` as their sides are measured
+        // (reads run ahead of that); cusps found are pushed after the laid points meanwhile.
+        let mut kept = first;
+        let mut next = self.side(&laid(out, 0), &mut hints);
         for i in 0..count + 1 {
-            let (this, after) = (next, self.side(&laid(out, i + 1)));
+            let (this, after) = (next, self.side(&laid(out, i + 1), &mut hints));
             next = after;
-            let (Some(mut fa), Some(mut fb)) = (this, after) else { continue };
+            if i < count && !after.is_some_and(|(_, cut)| cut) {
+                out[kept] = out[first + i];
+                kept += 1;
+            }
+            let (Some((mut fa, _)), Some((mut fb, _))) = (this, after) else { continue };
             if (fa > 0.0) == (fb > 0.0) {
                 continue;
             }
             let (mut ua, mut ub) = (u_of(i), u_of(i + 1));
             let mut best = None;
+            // The search keeps its own hints: the next laid point's follow on from this one's.
+            let mut search_hints = hints;
             for _ in 0..CUSP_STEPS {
                 let u = if fb != fa { ua - fa * (ub - ua) / (fb - fa) } else { 0.5 * (ua + ub) };
                 let u = u.clamp(ua.min(ub), ua.max(ub));
                 let point = at(u);
-                best = Some(point);
-                let Some(f) = self.side(&point) else { break };
+                let Some((f, cut)) = self.side(&point, &mut search_hints) else { break };
+                best = (!cut).then_some(point);
                 if f == 0.0 {
                     break;
                 }
@@ -630,6 +671,7 @@ impl<'r> Cutter<'r> {
             }
             out.extend(best);
         }
+        out.drain(kept..first + count);
     }
 
     /// The points of `points` no ball reaches.
@@ -785,11 +827,18 @@ mod tests {
         let mut out = Vec::new();
         line(a, b, 0.5, 4.0, None, &mut out);
         assert_eq!(out.len(), 4, "four points, none on the cusp");
+        let laid = out.clone();
         cutter.add_cusps(a, b, 0, None, &mut out);
-        assert_eq!(out.len(), 5, "one cusp between the rings");
+        // The two laid points nearest the rings are cut (the balls reach them) and dropped, the
+        // two inner ones kept in order, and the cusp added after them.
+        let uncut: Vec<GatePoint> = laid.iter().filter(|p| !cutter.cuts(p)).copied().collect();
+        assert_eq!(uncut, [laid[1], laid[2]]);
+        assert_eq!(out.len(), 3, "one cusp between the rings");
+        assert_eq!(out[..2], uncut[..]);
         let gap = |p: &GatePoint| {
             let q = p.0 + p.1 * h;
-            refs.iter().map(|ring| ring.near_dist2(q, p.3, LOCAL_SEGMENTS).sqrt()).fold(f64::INFINITY, f64::min) - r
+            refs.iter().map(|ring| ring.near_dist2(q, p.3, LOCAL_SEGMENTS, &mut 0).sqrt()).fold(f64::INFINITY, f64::min)
+                - r
         };
         let dense = (0..=20_000)
             .map(|i| {
@@ -798,12 +847,12 @@ mod tests {
             })
             .map(|p| gap(&p))
             .fold(f64::NEG_INFINITY, f64::max);
-        let found = gap(&out[4]);
+        let found = gap(&out[2]);
         // The V's flanks slope by about 0.13, the brute force steps 4e-5 mm: it may fall short
         // of the peak by up to 3e-6 mm, never pass it.
         assert!(found >= dense - 1e-12 && found - dense < 5e-6, "cusp gap {found} mm, brute force {dense} mm");
         // The four evenly spaced points pass well under it.
-        let sampled = out[..4].iter().map(gap).fold(f64::NEG_INFINITY, f64::max);
+        let sampled = laid.iter().map(gap).fold(f64::NEG_INFINITY, f64::max);
         assert!(dense - sampled > 1e-3, "sampled {sampled}, cusp {dense}");
     }
 }

@@ -74,29 +74,13 @@ pub fn clear_facets(
         !short(ca, cb) && faces.segment_nearer_than(ca, cb, limit)
     };
 
-    // Each centre on its own (in parallel): off its own face first; one traversal then confirms
-    // that no other facet is within R of it (most centres need no more).
-    let cleared = crate::par::each(cc.len(), |i| {
-        let mut report = Clearance::default();
-        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report);
-        if i == 0 || !faces.point_nearer_than(centre(b), ball.keep_mm() * (1.0 - CLEAR_REL)) {
-            return (b, report);
-        }
-        let mut report = Clearance::default();
-        (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
-    });
-    // Then each move between two cleared centres (in parallel): the points to append for it,
-    // split at cleared midpoints while it dips into a facet.
-    let moves = crate::par::each(cc.len(), |i| {
-        let mut report = Clearance::default();
-        let b = cleared[i].0;
-        if i == 0 {
-            return (vec![b], report);
-        }
-        let prev = cleared[i - 1].0;
+    // The move ending at centre `i`, from `prev` to `b`, when it dips into a facet: its points,
+    // split at cleared midpoints, `b` last.
+    let split_move = |prev: (DVec3, DVec3), b: (DVec3, DVec3), i: usize| {
         if !dips(prev, b) {
-            return (vec![b], report);
+            return None;
         }
+        let mut report = Clearance::default();
         let mut pending = vec![(prev, b, 0usize)];
         let mut inserted = Vec::new();
         // Depth first, left half first, so the points come out in path order. The whole move
@@ -118,16 +102,39 @@ pub fn clear_facets(
             pending.push((m, b, depth + 1));
             pending.push((a, m, depth + 1));
         }
-        (inserted, report)
+        Some((i, inserted, report))
+    };
+    // Each centre on its own (in parallel): off its own face first; one traversal then confirms
+    // that no other facet is within R of it (most centres need no more).
+    let cleared = crate::par::each(cc.len(), |i| {
+        let mut report = Clearance::default();
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report);
+        if i == 0 || !faces.point_nearer_than(centre(b), ball.keep_mm() * (1.0 - CLEAR_REL)) {
+            return (b, report);
+        }
+        let mut report = Clearance::default();
+        (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
+    });
+    // Then each move between two cleared centres (in chunks, in parallel): the points of those
+    // that dip into a facet (most do not, and allocate nothing).
+    let moves = crate::par::each(cc.len().div_ceil(CHUNK), |k| {
+        let range = k * CHUNK..((k + 1) * CHUNK).min(cc.len());
+        range.filter(|&i| i > 0).filter_map(|i| split_move(cleared[i - 1].0, cleared[i].0, i)).collect::<Vec<_>>()
     });
     let mut report = Clearance::default();
     for (_, r) in &cleared {
         report.merge(r);
     }
     let mut path: Vec<(DVec3, DVec3)> = Vec::with_capacity(cc.len());
-    for (points, r) in moves {
-        report.merge(&r);
-        path.extend(points);
+    let mut split = moves.into_iter().flatten().peekable();
+    for (i, (b, _)) in cleared.iter().enumerate() {
+        match split.next_if(|(at, _, _)| *at == i) {
+            Some((_, points, r)) => {
+                report.merge(&r);
+                path.extend(points);
+            }
+            None => path.push(*b),
+        }
     }
     // Centres pushed into the same pocket (narrower than the ball) land on one point: the ball
     // stays there, so the repeat is dropped.
@@ -147,6 +154,9 @@ impl Clearance {
         self.merged += other.merged;
     }
 }
+
+/// Moves handed to one job of [`clear_facets`]'s second pass.
+const CHUNK: usize = 256;
 
 /// One centre `p + R·n` cleared: the new contact and normal.
 fn clear_one(
