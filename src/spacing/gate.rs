@@ -760,9 +760,9 @@ mod tests {
         let end = |s: f64, z: f64| (dir * s + DVec3::Z * z, n, DVec2::new(theta, s / 10.0));
         let (a, b) = (end(10.0, 0.0), end(9.2, 0.005));
         let mut out = Vec::new();
-        line(a, b, 0.5, 4.0, None, &mut out);
+        line(a, b, 0.5, 4.0, &mut out);
         assert_eq!(out.len(), 4, "four points, none on the cusp");
-        cutter.add_cusps(a, b, 0, None, &mut out);
+        cutter.add_cusps(a, b, 0, &mut out);
         assert_eq!(out.len(), 5, "one cusp between the rings");
         let gap = |p: &GatePoint| {
             let q = p.0 + p.1 * h;
