@@ -478,7 +478,11 @@ fn issue_4_a_rim_point_the_first_ring_leaves_uncut_does_not_stall_the_spacing() 
     // the meridians put the first ring 2 µm inside the rim, and the gate still found a rim point
     // (|w| = 1) uncut with the lifts planned from 0.03 h. It moved the ring onto the rim, so the
     // next band began at |w| = 1 again with a zero step, and the spacing never returned. Points
-    // on the ring above's own line are now left to that ring (a gate compromise).
+    // on the ring above's own line are now left to that ring (a gate compromise). Since the
+    // spacing lifts the rings' centres rather than lowering the points tested (issue 34), the gate
+    // no longer finds that rim point uncut: what is kept is that the spacing ends. Its balls in
+    // the facet valleys are now planned lifted by LIFT_CAP·h rather than not at all: 1317 rings
+    // (710 before), 1.30 h outside the valleys (1.65 h before).
     let Some((p, _)) = shared_planner("inverted_triangles.stl") else { return };
     // The conformal map's first ring, which found it.
     let options = PlanOptions {
@@ -498,9 +502,8 @@ fn issue_4_a_rim_point_the_first_ring_leaves_uncut_does_not_stall_the_spacing() 
         v.max_scallop_mm / h,
         v.max_scallop_outside_valleys_mm / h
     );
-    assert!(pl.rings.gate_compromises >= 1);
     assert!(pl.rings.rings.windows(2).all(|w| w[1].radius < w[0].radius));
-    assert!(pl.rings.rings.len() < 1000, "{} rings", pl.rings.rings.len());
+    assert!(pl.rings.rings.len() < 2000, "{} rings", pl.rings.rings.len());
     assert_eq!(pl.toolpath.stats.retractions, 1);
     assert_eq!(v.gouges, 0);
 }

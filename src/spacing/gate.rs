@@ -9,8 +9,8 @@
 //! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on a fine
 //! polar grid round each hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
 //! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
-//! such gaps at up to 1.3 h on the shared meshes). With exact facets each point is first taken
-//! lower by the lift the spacing plans for a ball touching there (see `Spacer::lift_mm`).
+//! such gaps at up to 1.3 h on the shared meshes). With exact facets the polylines' centres are
+//! moved out by the lift the spacing plans for each ball (see `Spacer::lift_mm`).
 //!
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
 //! its top: on every edge crossing the band and on lines arg w = const across each of its faces
@@ -34,8 +34,8 @@ const STRIP: f64 = 0.25;
 /// the band off the cusp passes up to h/2 below the peak, a sixteenth h/4: with 4 strips
 /// halftunnel kept 1.05 h (smooth) between its meridians, with 8 0.98 h.
 const MIN_STRIPS: f64 = 8.0;
-/// With lifted balls the points are lowered by an estimate good to a few tenths of h, and finer
-/// levels did not help (the shared meshes' largest scallops moved both ways): 4 strips.
+/// With lifted balls the lifts are an estimate good to a few tenths of h, and finer levels did
+/// not help (the shared meshes' largest scallops moved both ways): 4 strips.
 const MIN_STRIPS_LIFTED: f64 = 4.0;
 /// Points along a line are this many R apart, along an edge [`EDGE_STEP`] and at least
 /// [`EDGE_MIN`] per edge.
@@ -43,14 +43,12 @@ const LINE_STEP: f64 = 0.25;
 const EDGE_STEP: f64 = 1.0 / 16.0;
 const EDGE_MIN: f64 = 4.0;
 
-/// A point to test: surface point, unit normal, |w|, arg w. The point is taken lower along its
-/// normal by the lift of a ball touching there off its facet that the spacing plans for (see
-/// `Spacer::lift_mm`), so that S^h is tested where the lifted balls must reach.
+/// A point to test: surface point, unit normal, |w|, arg w.
 pub(super) type GatePoint = (DVec3, DVec3, f64, f64);
 
-/// An edge: its vertices, the normals at both ends, the log-polar image of both ends, a face
-/// on it (on the side of those normals).
-type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2, usize);
+/// An edge: its vertices, the normals at both ends (on one side), the log-polar image of both
+/// ends.
+type GateEdge = ([u32; 2], [DVec3; 2], DVec2, DVec2);
 
 /// Where each band is tested, precomputed per map.
 pub(super) struct Gate<'a> {
@@ -123,10 +121,8 @@ impl<'a> Gate<'a> {
     ) -> Self {
         let corners = map.log_polar_corners();
         // The hole-end points (a nearest-face search) beside the edges.
-        let (tips, edges) = crate::par::join(
-            || tip_points(surface, map, &corners, faces, radius_mm, lift_h),
-            || edges_of(surface, map),
-        );
+        let (tips, edges) =
+            crate::par::join(|| tip_points(surface, map, &corners, faces, radius_mm), || edges_of(surface, map));
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
         let rho_gradient = crate::par::each(corners.len(), |f| {
@@ -188,21 +184,26 @@ impl<'a> Gate<'a> {
             }
         });
         let edges = chunked(self.edge_index.near(lo, hi).collect(), &|e, out| {
-            let ([a, b], normals, wa, wb, face) = self.edges[e];
+            let ([a, b], normals, wa, wb) = self.edges[e];
             // The part of the edge inside the band.
             let (u0, u1) = clip(wa.y, wb.y, lo, hi);
             if u1 > u0 {
                 let ab = [a as usize, b as usize];
                 let (p, q) = (self.end(ab, normals, wa, wb, u0), self.end(ab, normals, wa, wb, u1));
                 let first = out.len();
-                line(p, q, EDGE_STEP * self.radius_mm, EDGE_MIN, self.lift_of(face), out);
-                cutter.add_cusps(p, q, first, self.lift_of(face), out);
+                line(p, q, EDGE_STEP * self.radius_mm, EDGE_MIN, out);
+                cutter.add_cusps(p, q, first, out);
             }
         });
         let first = self.tips.partition_point(|p| p.2 <= lo);
         let tips = &self.tips[first..];
         let tips = cutter.uncut(&tips[..tips.partition_point(|p| p.2 < hi)]);
         faces.into_iter().chain(edges).flatten().chain(tips).collect()
+    }
+
+    /// The facet tree of the surface.
+    pub(super) fn faces(&self) -> &'a FaceTree {
+        self.faces
     }
 
     /// `p` with the image (|w|, arg w) that `lift` sends to its place on the surface. The points
@@ -228,7 +229,7 @@ impl<'a> Gate<'a> {
                 continue;
             }
             if let Some([a, b]) = self.chord(f, level, |w| w.y) {
-                line(a, b, LINE_STEP * self.radius_mm, 2.0, self.lift_of(f), out);
+                line(a, b, LINE_STEP * self.radius_mm, 2.0, out);
             }
         }
     }
@@ -255,7 +256,7 @@ impl<'a> Gate<'a> {
                 let end = |u: f64| (a.0.lerp(b.0, u), a.1.lerp(b.1, u), a.2.lerp(b.2, u));
                 // Only the cusp: the line's fixed points would repeat the edges' and the levels'.
                 let first = out.len();
-                cutter.add_cusps(end(u0), end(u1), first, self.lift_of(f), out);
+                cutter.add_cusps(end(u0), end(u1), first, out);
             }
         }
     }
@@ -277,11 +278,6 @@ impl<'a> Gate<'a> {
             }
         }
         (found == 2).then_some(ends)
-    }
-
-    /// What the planned lift of a ball touching face `f` depends on (see [`Lowered`]).
-    fn lift_of(&self, f: usize) -> Option<Lowered> {
-        self.lift_h.map(|h| (self.surface.face_normals[f], self.radius_mm, h))
     }
 
     /// The point at `u` along the edge from vertex `vi` to `vj`.
@@ -317,28 +313,14 @@ const CUSP_STEPS: usize = 4;
 const CHUNK: usize = 256;
 
 /// Points spaced at most `step` (at least `min`) along the segment between two ends, the middles
-/// of equal pieces, lowered by their planned lift when `lift` is given.
-fn line(a: End, b: End, step: f64, min: f64, lift: Option<Lowered>, out: &mut Vec<GatePoint>) {
+/// of equal pieces.
+fn line(a: End, b: End, step: f64, min: f64, out: &mut Vec<GatePoint>) {
     let m = ((b.0 - a.0).length() / step).ceil().max(min) as usize;
-    let first = out.len();
     for i in 0..m {
         let u = (i as f64 + 0.5) / m as f64;
         let w = a.2.lerp(b.2, u);
         out.push((a.0.lerp(b.0, u), a.1.lerp(b.1, u).normalize_or_zero(), w.y, w.x));
     }
-    if let Some(lift) = lift {
-        for p in &mut out[first..] {
-            p.0 = lowered(p.0, p.1, lift);
-        }
-    }
-}
-
-/// A face's normal, R and the user's h: what the planned lift of a ball touching it depends on.
-type Lowered = (DVec3, f64, f64);
-
-/// `p` (unit normal `n`) taken lower by the planned lift of a ball touching there.
-fn lowered(p: DVec3, n: DVec3, (facet, r, h): Lowered) -> DVec3 {
-    p - n * super::facet_lift_mm(n, facet, r, h)
 }
 
 /// Every edge of the surface with its corner normals and log-polar ends, once per side of an edge
@@ -363,7 +345,7 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
         .iter()
         .map(|e| {
             let (a, b) = super::strip_edge(map, e.0[0], e.0[1]);
-            (e.0, normals(e), a, b, e.1)
+            (e.0, normals(e), a, b)
         })
         .collect()
 }
@@ -379,7 +361,6 @@ fn tip_points(
     corners: &[[DVec2; 3]],
     tree: &FaceTree,
     radius_mm: f64,
-    lift_h: Option<f64>,
 ) -> Vec<GatePoint> {
     let mut tips: Vec<u32> = Vec::new();
     for slit in &map.slits {
@@ -415,10 +396,7 @@ fn tip_points(
                 normal += b * surface.corner_normal(hit.face, k);
                 w += b * c;
             }
-            let normal = normal.normalize_or_zero();
-            let p = lift_h
-                .map_or(hit.point, |h| lowered(hit.point, normal, (surface.face_normals[hit.face], radius_mm, h)));
-            out.push((p, normal, w.y, w.x));
+            out.push((hit.point, normal.normalize_or_zero(), w.y, w.x));
         }
         out
     });
@@ -613,7 +591,7 @@ impl<'r> Cutter<'r> {
     /// Points (laid or found) that the distances measured on the way show cut are dropped: the
     /// caller's test of each point ([`Cutter::cuts`]) would drop them, and those distances
     /// settle most of them.
-    fn add_cusps(&self, a: End, b: End, first: usize, lift: Option<Lowered>, out: &mut Vec<GatePoint>) {
+    fn add_cusps(&self, a: End, b: End, first: usize, out: &mut Vec<GatePoint>) {
         if self.rings.len() != 2 {
             return;
         }
@@ -621,8 +599,7 @@ impl<'r> Cutter<'r> {
         let at = |u: f64| -> GatePoint {
             let w = a.2.lerp(b.2, u);
             let n = a.1.lerp(b.1, u).normalize_or_zero();
-            let p = a.0.lerp(b.0, u);
-            (lift.map_or(p, |l| lowered(p, n, l)), n, w.y, w.x)
+            (a.0.lerp(b.0, u), n, w.y, w.x)
         };
         // The points of `line` are the middles of `count` equal pieces; with the two ends (on
         // the band's rings where the edge crosses it whole) they bracket every cusp.
@@ -825,10 +802,10 @@ mod tests {
         let end = |s: f64, z: f64| (dir * s + DVec3::Z * z, n, DVec2::new(theta, s / 10.0));
         let (a, b) = (end(10.0, 0.0), end(9.2, 0.005));
         let mut out = Vec::new();
-        line(a, b, 0.5, 4.0, None, &mut out);
+        line(a, b, 0.5, 4.0, &mut out);
         assert_eq!(out.len(), 4, "four points, none on the cusp");
         let laid = out.clone();
-        cutter.add_cusps(a, b, 0, None, &mut out);
+        cutter.add_cusps(a, b, 0, &mut out);
         // The two laid points nearest the rings are cut (the balls reach them) and dropped, the
         // two inner ones kept in order, and the cusp added after them.
         let uncut: Vec<GatePoint> = laid.iter().filter(|p| !cutter.cuts(p)).copied().collect();

@@ -29,7 +29,8 @@
 //! With exact facets ([`SpacingOptions::facet_lift`]) the toolpath moves every ball centre off
 //! the facets, along the interpolated normal: where that normal is tilted from the facet's, the
 //! ball rides higher than the rings were spaced for, and the scallop beside it rises by as much.
-//! The points tested are then taken that much lower (within bounds, see `facet_lift_mm`).
+//! The rings' ball centres are then moved out by that much (within bounds, see `planned_lift_mm`)
+//! before the band between them is tested.
 //!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
@@ -48,8 +49,8 @@
 //! polygonal sag of a slit radius (so a ring never runs through a slit), every meridian
 //! cusp tested at most R from a ball centre on S^{h·target_fraction}, and every gate point of a
 //! band cut at 0.95 h, but in the bands counted by `gate_compromises` (and the last band of a
-//! disk map, closed by the ball at the pole); with exact facets, both heights less the lift
-//! planned at the point.
+//! disk map, closed by the ball at the pole); with exact facets, against centres moved out by
+//! their planned lift.
 
 // `!(x > y)` is deliberate: NaN must fail every progress test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -333,17 +334,15 @@ const GATE_SAG: f64 = 0.02;
 const LIFT_FREE: f64 = 0.03;
 /// Lifts are planned for up to this fraction of h.
 const LIFT_CAP: f64 = 0.65;
-/// Lifts above this fraction of h are not planned for at all (see [`facet_lift_mm`]): the
-/// verifier reports the faces where they occur as facet valleys.
+/// Where the facets alone leave more than this fraction of h (a ball touching there lifts by
+/// more), the verifier reports a facet valley: no ring reaches into it.
 pub const LIFT_VALLEY: f64 = 0.75;
 
-/// The part of a ball's lift off a facet the spacing plans for (see [`Spacer::lift_mm`]): the
-/// ball of radius `r` at a contact of unit normal `n` on a facet of normal `facet`.
-fn facet_lift_mm(n: DVec3, facet: DVec3, r: f64, h: f64) -> f64 {
-    let lift = crate::mesh::ball_lift_mm(n, facet, r);
-    if lift > LIFT_VALLEY * h {
-        return 0.0; // a faceted valley: no ring can leave less than about the lift there
-    }
+/// The part of a ball's lift `lift` off the facets the spacing plans for (see
+/// [`Spacer::lift_mm`]). A ball in a facet valley (lifted by more than [`LIFT_VALLEY`]·h) still
+/// rides at least [`LIFT_CAP`]·h higher: gen198's rings lifted 0.71–0.78 h, and the band between
+/// them kept 1.06 h when the valley's balls were planned on the surface.
+fn planned_lift_mm(lift: f64, h: f64) -> f64 {
     (lift - LIFT_FREE * h).clamp(0.0, LIFT_CAP * h)
 }
 
@@ -773,7 +772,7 @@ impl<'a> Spacer<'a> {
                 None => self.lift.polar(rho, t),
             }
             .ok_or(SpacingError::Lift { rho, theta: t })?;
-            Ok((l.p + l.n * self.ball, l.face, l.p))
+            Ok((self.ball_centre(&l), l.face, l.p))
         };
         let angle = |i: usize| TAU * i as f64 / M as f64;
         let mut base: Vec<(DVec3, u32, DVec3)> = Vec::with_capacity(M + 1);
@@ -804,7 +803,8 @@ impl<'a> Spacer<'a> {
                     None => {
                         // The normals jump here (a split crease): over a convex edge the ball
                         // rolls round it, so its centres run on the arc there, not the chord.
-                        let (na, nb) = ((ca - pa) / self.ball, (cb - pb) / self.ball);
+                        let (na, nb) = ((ca - pa).normalize(), (cb - pb).normalize());
+                        let reach = 0.5 * ((ca - pa).length() + (cb - pb).length());
                         let jump = (cb - ca).length();
                         if jump > tol && (pb - pa).length() < 0.1 * jump && (nb - na).dot(pb - pa) > 0.0 {
                             let e = 0.5 * (pa + pb);
@@ -813,7 +813,7 @@ impl<'a> Spacer<'a> {
                             let m = ((turn * (self.ball / (8.0 * tol)).sqrt()).ceil() as usize).max(1);
                             for k in 1..m {
                                 let u = k as f64 / m as f64;
-                                out.push((ta + u * (tb - ta), e + self.ball * na.lerp(nb, u).normalize()));
+                                out.push((ta + u * (tb - ta), e + reach * na.lerp(nb, u).normalize()));
                             }
                         }
                         out.push((tb, cb))
@@ -939,39 +939,46 @@ impl<'a> Spacer<'a> {
         self.lift.polar(rho, theta).ok_or(SpacingError::Lift { rho, theta })
     }
 
-    /// Point of S^h on the meridian θ at radius s, lowered by the ball's expected lift there
-    /// ([`Spacer::lift_mm`]).
+    /// Point of S^h on the meridian θ at radius s.
     fn q(&self, s: f64, theta: f64) -> Result<DVec3, SpacingError> {
         Ok(self.q_at(&self.point(s, theta)?))
     }
 
-    /// Point of S^h over the contact `l`, lowered as in [`Spacer::q`].
+    /// Point of S^h over the contact `l`.
     fn q_at(&self, l: &Lifted) -> DVec3 {
-        l.p + l.n * (self.h - self.lift_mm(l))
+        l.p + l.n * self.h
     }
 
-    /// With exact facets, how much higher than planned a ball whose contact is `l` rides: placed
-    /// along the interpolated normal n it dips into the facet (and, at a concave edge, its
-    /// neighbour) whose normal is tilted by α from n, and is moved out along n by
-    /// R(1/cos α − 1); the scallop beside it rises by about as much. The first
-    /// [`LIFT_FREE`]·h of it is left to the target's margin, at most [`LIFT_CAP`]·h is planned
-    /// for, and none above [`LIFT_VALLEY`]·h: there the facets form a valley the ball cannot
-    /// reach into, which keeps about the lift whatever the rings (rings spaced for the rest of h
-    /// would crowd the whole band for it).
+    /// The centre of the ball touching at `l`, moved out along the normal by its planned lift
+    /// off the facets ([`Spacer::lift_mm`]), as the toolpath will move it.
+    fn ball_centre(&self, l: &Lifted) -> DVec3 {
+        l.p + l.n * (self.ball + self.lift_mm(l))
+    }
+
+    /// With exact facets, how much higher than on the surface's offset the ball whose contact is
+    /// `l` rides: placed along the interpolated normal n it dips into the facet whose normal is
+    /// tilted by α from n (and, at a concave edge, its neighbour), and the toolpath moves it out
+    /// along n until no facet is nearer than R ([`crate::toolpath::clear_facets`], R(1/cos α − 1)
+    /// off one facet's plane): the same clearance is run here. The first [`LIFT_FREE`]·h of it is
+    /// left to the target's margin and at most [`LIFT_CAP`]·h is planned for ([`planned_lift_mm`]).
+    /// The rings' centres are moved out by it, so that a band is tested against the balls that
+    /// will cut it. Lowering the points tested by the lift of a ball touching *there* instead
+    /// missed the cutting balls' own (gen001, 146 and 198 of issue 34's sweep kept 1.01–1.06 h),
+    /// and the contact facet's R(1/cos α − 1) alone, which jumps at every edge, left gen198
+    /// 1.10 h where the ball rests on an edge.
     fn lift_mm(&self, l: &Lifted) -> f64 {
         let Some(h) = self.lift_h else { return 0.0 };
-        facet_lift_mm(l.n, self.lift.surface().face_normals[l.face as usize], self.ball, h)
+        let start = l.p + l.n * self.ball;
+        let ball = self.gate.faces().clear_ball(start, l.n, self.ball, Some(l.face as usize), true);
+        planned_lift_mm((ball.centre - start).dot(l.n), h)
     }
 
     /// Ball centres of the ring `rho` around angle θ: five centres spanning about ±R along
     /// the ring, enough to contain the nearest centre to any point of the band on this meridian.
     fn chain(&self, rho: f64, theta: f64) -> Result<Chain, SpacingError> {
-        let centre = |t: f64| -> Result<DVec3, SpacingError> {
-            let l = self.point(rho, t)?;
-            Ok(l.p + l.n * self.ball)
-        };
+        let centre = |t: f64| -> Result<DVec3, SpacingError> { Ok(self.ball_centre(&self.point(rho, t)?)) };
         let contact = self.point(rho, theta)?;
-        let c0 = contact.p + contact.n * self.ball;
+        let c0 = self.ball_centre(&contact);
         let probe = 1e-4;
         let speed = (centre(theta + probe)? - c0).length() / probe;
         if !(speed > 1e-9) {
@@ -1273,27 +1280,39 @@ mod tests {
     }
 
     #[test]
-    fn the_planned_facet_lift_is_the_balls_lift_within_its_band() {
+    fn the_planned_lift_is_the_cleared_balls_lift_within_its_band() {
         // A ball of radius R along a normal tilted by α from its facet's is moved out by
-        // R(1/cos α − 1): then it touches the facet's plane.
+        // R(1/cos α − 1) by the clearance (then it touches the facet's plane); the spacing plans
+        // that lift less the free part, up to the cap, in facet valleys too.
         let (r, h) = (3.0, 0.02);
-        let facet = DVec3::Z;
-        for deg in [0.0f64, 2.0, 4.0, 5.0, 5.5, 6.0, 7.0, 10.0, 60.0] {
-            let n = DVec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos());
-            let lift = crate::mesh::ball_lift_mm(n, facet, r);
-            assert!(((r + lift) * n.z - r).abs() < 1e-12, "{deg}°: the lifted ball is not on the plane");
-            let planned = facet_lift_mm(n, facet, r, h);
-            let expected = if lift > LIFT_VALLEY * h { 0.0 } else { (lift - LIFT_FREE * h).clamp(0.0, LIFT_CAP * h) };
-            assert!((planned - expected).abs() < 1e-12 * r, "{deg}°: {planned} mm planned, {expected} expected");
-            assert!((0.0..=LIFT_CAP * h).contains(&planned));
-        }
-        // A normal facing away from the facet (a fold) is a valley too: nothing planned.
-        assert_eq!(facet_lift_mm(-DVec3::Z, facet, r, h), 0.0);
-        // 1° lifts 0.46 µm (< 0.03 h: left to the margin); 5° lifts 11.5 µm: planned.
+        let positions = [DVec3::new(-50.0, -50.0, 0.0), DVec3::new(50.0, -50.0, 0.0), DVec3::new(0.0, 50.0, 0.0)];
+        let tree = FaceTree::new(&positions, &[[0, 1, 2]]);
         let tilted = |deg: f64| DVec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos());
-        assert_eq!(facet_lift_mm(tilted(1.0), facet, r, h), 0.0);
-        assert!(facet_lift_mm(tilted(2.0), facet, r, h) > 0.05 * h);
-        assert!(facet_lift_mm(tilted(5.0), facet, r, h) > 0.4 * h);
+        let planned = |deg: f64| {
+            let n = tilted(deg);
+            let start = n * r;
+            let ball = tree.clear_ball(start, n, r, Some(0), true);
+            let lift = (ball.centre - start).dot(n);
+            assert!((lift - crate::mesh::ball_lift_mm(n, DVec3::Z, r)).abs() < 1e-8 * r, "{deg}°: lift {lift}");
+            planned_lift_mm(lift, h)
+        };
+        for deg in [0.0f64, 2.0, 4.0, 5.0, 5.5, 6.0, 7.0, 10.0, 60.0] {
+            let lift = crate::mesh::ball_lift_mm(tilted(deg), DVec3::Z, r);
+            let expected = (lift - LIFT_FREE * h).clamp(0.0, LIFT_CAP * h);
+            assert!(
+                (planned(deg) - expected).abs() < 1e-8 * r,
+                "{deg}°: {} mm planned, {expected} expected",
+                planned(deg)
+            );
+        }
+        // 1° lifts 0.46 µm (< 0.03 h: left to the margin); 5° lifts 11.5 µm: planned; 10°
+        // (a valley: 2.3 h) is planned up to the cap, not dropped.
+        assert_eq!(planned(1.0), 0.0);
+        assert!(planned(2.0) > 0.05 * h);
+        assert!(planned(5.0) > 0.4 * h);
+        assert_eq!(planned(10.0), LIFT_CAP * h);
+        // A normal facing away from the facet (a fold) rides as high as planned at most.
+        assert_eq!(planned_lift_mm(f64::INFINITY, h), LIFT_CAP * h);
     }
 
     #[test]
