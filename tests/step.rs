@@ -11,6 +11,19 @@ fn tess(text: &str, o: &StepOptions) -> (step::Model, step::Tessellation) {
     (m, t)
 }
 
+/// Plans a loaded STEP part with R 3 mm, h 0.02 mm and 20 000 verifier samples, and checks the
+/// verifier: max scallop within h, no gouge.
+fn plans_within_h(out: step::StepOutput) -> slitpath::plan::Plan {
+    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
+    let h = 0.02;
+    let options =
+        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let v = p.report.verify.as_ref().expect("verified");
+    assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
+    p
+}
+
 /// Largest of `distance(p)` over a barycentric grid of every triangle: `distance` is the
 /// exact distance of a point from the analytic surface (or an upper bound of it).
 fn dense_chordal(t: &step::Tessellation, distance: &dyn Fn(DVec3) -> f64) -> f64 {
@@ -182,14 +195,7 @@ fn garbled_and_truncated_files_give_typed_errors() {
 fn a_trimmed_bspline_part_plans_end_to_end_with_the_verifier_passing() {
     let text = fx::patch_with_hole();
     let out = step::load(text.as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
-    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
-    let h = 0.02;
-    let options =
-        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
-    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
-    let v = p.report.verify.as_ref().expect("verified");
-    assert!(v.max_scallop_mm <= h, "max scallop {} mm", v.max_scallop_mm);
-    assert_eq!(v.gouges, 0);
+    let p = plans_within_h(out);
     assert!(p.gcode.lines().count() > 1000);
 }
 
@@ -298,13 +304,7 @@ fn a_closed_solid_without_a_selection_is_planned_on_its_top_faces() {
         other => panic!("expected NotOneSurface, got {other:?}"),
     }
 
-    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
-    let h = 0.02;
-    let options =
-        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
-    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
-    let v = p.report.verify.as_ref().expect("verified");
-    assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
+    plans_within_h(out);
 }
 
 /// A dome as CAD writes it (a sphere face bounded by a circle and a VERTEX_LOOP at its pole) was
@@ -329,13 +329,7 @@ fn a_dome_closed_by_a_vertex_loop_at_its_pole_tessellates_and_plans() {
 
     let out = step::load(text.as_bytes(), &o, &MeshOptions::default(), &|| 0.0).unwrap();
     assert_eq!(out.mesh.surface.loops.len(), 1);
-    let planner = slitpath::plan::Planner::new(out.mesh, &|| 0.0).expect("planner");
-    let h = 0.02;
-    let options =
-        slitpath::plan::PlanOptions { radius_mm: 3.0, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
-    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
-    let v = p.report.verify.as_ref().expect("verified");
-    assert!(v.max_scallop_mm <= h && v.gouges == 0, "max scallop {} mm, gouges {}", v.max_scallop_mm, v.gouges);
+    plans_within_h(out);
 }
 
 /// The same closing at a cone's apex: every vertex on the cone, one at the apex, the lateral area.

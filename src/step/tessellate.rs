@@ -423,8 +423,8 @@ fn mesh_face(
 /// The circle round the pole `pole` of `s` (in direction 1 − `d`, the loop `cap` winding round
 /// direction `d`) that a fan to the pole stands for within the tolerance: as far from the pole
 /// as the fan's sag allows, at most `max_edge`; its samples (new positions) go round a full turn
-/// in the sense `sense` (±1) as a loop of local indices, in the order they were made. `None` when the surface does not
-/// shrink to `pole` there.
+/// in the sense `sense` (±1) as a loop of local indices, in the order they were made. `None`
+/// when the surface does not shrink to `pole` there.
 #[allow(clippy::too_many_arguments)]
 fn pole_circle(
     s: &super::geom::Surface,
