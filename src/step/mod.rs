@@ -203,14 +203,16 @@ pub fn load(
     now: &dyn Fn() -> f64,
 ) -> Result<StepOutput, StepError> {
     let (model, tess, [read_ms, tessellate_ms]) = read_and_tessellate(bytes, o, now)?;
-    let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
-    let out = mesh::from_triangles(&trimesh, mesh_options)?;
+    let meshed = |tess: &Tessellation| {
+        let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
+        mesh::from_triangles(&trimesh, mesh_options)
+    };
+    let out = meshed(&tess)?;
     if o.faces.is_none() && out.report.closed {
         let top = top_faces(&tess, mesh_options)?;
         let o = StepOptions { faces: Some(top), ..o.clone() };
         let (tess, more_ms) = tessellate_model(&model, &o, now)?;
-        let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
-        let out = mesh::from_triangles(&trimesh, mesh_options)?;
+        let out = meshed(&tess)?;
         let mut loaded = one_surface(&model, tess, out, &o, [read_ms, tessellate_ms + more_ms])?;
         loaded.step.top_of_solid = true;
         return Ok(loaded);
@@ -280,6 +282,12 @@ fn top_faces(tess: &Tessellation, mesh_options: &MeshOptions) -> Result<Vec<u64>
         *ok &= n.dot(axis) >= cos_wall;
     }
     let facing: Vec<&FaceInfo> = tess.faces.iter().filter(|f| faces_tool.get(&f.id) == Some(&true)).collect();
+    if facing.is_empty() {
+        return Err(StepError::Mesh(mesh::MeshError::NothingFacesTool {
+            axis: axis.to_array(),
+            wall_angle_deg: mesh_options.wall_angle_deg,
+        }));
+    }
     let index: std::collections::BTreeMap<u64, usize> = facing.iter().enumerate().map(|(i, f)| (f.id, i)).collect();
     // Connected sets by shared edges, the largest by area (the first in id order on a tie).
     let mut set = vec![usize::MAX; facing.len()];
@@ -304,12 +312,6 @@ fn top_faces(tess: &Tessellation, mesh_options: &MeshOptions) -> Result<Vec<u64>
         if area > best.0 {
             best = (area, start);
         }
-    }
-    if facing.is_empty() {
-        return Err(StepError::Mesh(mesh::MeshError::NothingFacesTool {
-            axis: axis.to_array(),
-            wall_angle_deg: mesh_options.wall_angle_deg,
-        }));
     }
     Ok(facing.iter().zip(&set).filter(|(_, &s)| s == best.1).map(|(f, _)| f.id).collect())
 }

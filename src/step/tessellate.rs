@@ -467,18 +467,7 @@ fn pole_circle(
     }
     let v = vp + dv;
     let u0 = uv[cap[0] as usize][d];
-    let mut n = 8usize;
-    loop {
-        let ok = (0..n).all(|i| {
-            let (a, b) = (u0 + TAU * i as f64 / n as f64, u0 + TAU * (i + 1) as f64 / n as f64);
-            let (p0, p1, pm) = (s.point(at(a, v)), s.point(at(b, v)), s.point(at(0.5 * (a + b), v)));
-            (p1 - p0).length() <= max_edge && (pm - 0.5 * (p0 + p1)).length() <= 0.5 * tol
-        });
-        if ok || n >= 1 << 12 {
-            break;
-        }
-        n *= 2;
-    }
+    let n = pieces(8, &|t| s.point(at(u0 + TAU * t, v)), tol, max_edge);
     Some(
         (0..n)
             .map(|i| {
@@ -490,6 +479,23 @@ fn pole_circle(
             })
             .collect(),
     )
+}
+
+/// How many equal pieces of t ∈ [0, 1] (`start` doubled, at most 2¹²) the curve `at` needs for
+/// its chords to be at most `max_edge` long and within half the tolerance of it at their middles.
+fn pieces(start: usize, at: &dyn Fn(f64) -> DVec3, tol: f64, max_edge: f64) -> usize {
+    let mut n = start;
+    loop {
+        let ok = (0..n).all(|i| {
+            let (t0, t1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+            let (p0, p1, pm) = (at(t0), at(t1), at(0.5 * (t0 + t1)));
+            (p1 - p0).length() <= max_edge && (pm - 0.5 * (p0 + p1)).length() <= 0.5 * tol
+        });
+        if ok || n >= 1 << 12 {
+            return n;
+        }
+        n *= 2;
+    }
 }
 
 /// Joins loop `a` and loop `b`, which wind round direction `d` of the surface `wa` (±1) and
@@ -535,18 +541,7 @@ fn join_wound_loops(
     let (mut from, to) = (uv[a0], b_uv[0]);
     from[d] += wa * TAU;
     let at = |t: f64| s.eval(from.lerp(to, t)).0;
-    let mut n = 1usize;
-    loop {
-        let ok = (0..n).all(|i| {
-            let (t0, t1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
-            let (p0, p1, pm) = (at(t0), at(t1), at(0.5 * (t0 + t1)));
-            (p1 - p0).length() <= max_edge && (pm - 0.5 * (p0 + p1)).length() <= 0.5 * tol
-        });
-        if ok || n >= 1 << 12 {
-            break;
-        }
-        n *= 2;
-    }
+    let n = pieces(1, &at, tol, max_edge);
     let seam: Vec<(DVec2, u32)> = (1..n)
         .map(|i| {
             let t = i as f64 / n as f64;
