@@ -6,8 +6,8 @@
 //! (where the scallop jumps), and where the image overlaps itself below a slit tip (a region the
 //! rings skip), and round the ends of holes, where the rings turn. So the points tested are
 //! points along every edge in the band, along lines |w| = const across every face of it (at
-//! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on a fine
-//! polar grid round each hole's ends. A point is cut when its S^h point lies within R of the ball-centre polyline of
+//! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on fine
+//! polar grids round each hole's ends and the outer loop's convex corners. A point is cut when its S^h point lies within R of the ball-centre polyline of
 //! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
 //! such gaps at up to 1.3 h on the shared meshes). With exact facets the polylines' centres are
 //! moved out by the lift the spacing plans for each ball (see `Spacer::lift_mm`).
@@ -66,7 +66,7 @@ pub(super) struct Gate<'a> {
     /// |w|) of both ends, the second angle within π of the first; an edge on a crease where the
     /// normals split is there once per side.
     edges: Vec<GateEdge>,
-    /// Points round the ends of every hole (see [`tip_points`]), by |w|.
+    /// Points round the ends of every hole and the outer loop's corners (see [`tip_points`]), by |w|.
     tips: Vec<GatePoint>,
     /// Faces and edges by |w| (see [`ByRadius`]).
     face_index: ByRadius,
@@ -351,10 +351,12 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
 }
 
 /// Points of the surface round each end of each hole (the boundary vertices at its slit's
-/// ends), within R/2 of it on a polar grid ([`TIP_RINGS`] × [`TIP_SPOKES`]) in the tangent plane,
-/// projected onto the surface; sorted by |w|. The rings turn round a hole's end there and leave
-/// spikes narrower than the edge and line points (featuretype: 1.42 h at 0.18 R from a hole's
-/// corner, cut 2 µm away).
+/// ends) and round the sharpest convex corners of the outer loop, on polar grids in the tangent
+/// plane projected onto the surface; sorted by |w|. The rings turn round a hole's end there and
+/// leave spikes narrower than the edge and line points (featuretype: 1.42 h at 0.18 R from a
+/// hole's corner, cut 2 µm away). The map squeezes a convex corner of the outer loop into a face
+/// or two, where the band's uncut spot is a point the ring turning round the corner leaves, not a
+/// cusp between two rings (issue 34's sweep, gen016: 1.12 h 0.74 mm from a rectangle's corner).
 fn tip_points(
     surface: &Surface,
     map: &SlitMap,
@@ -376,17 +378,23 @@ fn tip_points(
             }
         }
     }
+    let outer = outer_corners(surface);
+    let grids: Vec<(u32, Grid)> =
+        tips.iter().map(|&v| (v, TIP_GRID)).chain(outer.iter().map(|&v| (v, CORNER_GRID))).collect();
     let reach = 0.5 * radius_mm;
-    // One job per tip and grid ring, on the pool; in order, so the same points on any threads.
-    let per_tip = crate::par::each(tips.len() * TIP_RINGS, |job| {
-        let (v, i) = (tips[job / TIP_RINGS] as usize, job % TIP_RINGS + 1);
+    // One job per anchor and grid ring, on the pool; in order, so the same points on any threads.
+    let jobs: Vec<(u32, Grid, usize)> =
+        grids.iter().flat_map(|&(v, g)| (1..=g.rings).map(move |i| (v, g, i))).collect();
+    let per_ring = crate::par::each(jobs.len(), |job| {
+        let (v, g, i) = jobs[job];
+        let v = v as usize;
         let (p0, n0) = (surface.positions[v], surface.vertex_normals[v]);
         let e1 = n0.any_orthonormal_vector();
         let e2 = n0.cross(e1);
-        let r = reach * i as f64 / TIP_RINGS as f64;
-        let mut out = Vec::with_capacity(TIP_SPOKES);
-        for j in 0..TIP_SPOKES {
-            let (sin, cos) = crate::num::sin_cos(TAU * j as f64 / TIP_SPOKES as f64);
+        let r = reach * i as f64 / g.rings as f64;
+        let mut out = Vec::with_capacity(g.spokes);
+        for j in 0..g.spokes {
+            let (sin, cos) = crate::num::sin_cos(TAU * j as f64 / g.spokes as f64);
             let p = p0 + r * (cos * e1 + sin * e2);
             // Off the part (in the hole, past a steep wall): nothing to test.
             let Some(hit) = tree.nearest(p, 0.1 * r) else { continue };
@@ -400,13 +408,44 @@ fn tip_points(
         }
         out
     });
-    let mut out: Vec<GatePoint> = per_tip.into_iter().flatten().collect();
+    let mut out: Vec<GatePoint> = per_ring.into_iter().flatten().collect();
     out.sort_by(|a, b| a.2.total_cmp(&b.2));
     out
 }
 
-const TIP_RINGS: usize = 48;
-const TIP_SPOKES: usize = 96;
+/// A polar grid round a point: rings within R/2, spokes per ring.
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    rings: usize,
+    spokes: usize,
+}
+
+const TIP_GRID: Grid = Grid { rings: 48, spokes: 96 };
+/// Coarser than a hole's end: at most [`MAX_CORNERS`] of them, and the spot is wider.
+const CORNER_GRID: Grid = Grid { rings: 24, spokes: 48 };
+/// The outer loop's vertices that turn by more than this (convex) get a grid.
+const CORNER_TURN: f64 = PI / 6.0;
+/// At most this many, the sharpest first (a scanned rim can turn at every vertex).
+const MAX_CORNERS: usize = 256;
+
+/// The outer loop's convex corners that turn by more than [`CORNER_TURN`] in the tangent plane,
+/// the sharpest [`MAX_CORNERS`] (ties by vertex id, for determinism).
+fn outer_corners(surface: &Surface) -> Vec<u32> {
+    let Some(lp) = surface.loops.first() else { return Vec::new() };
+    let n = lp.len();
+    let mut found: Vec<(f64, u32)> = (0..n)
+        .filter_map(|i| {
+            let [a, b, c] = [lp[(i + n - 1) % n], lp[i], lp[(i + 1) % n]].map(|v| surface.positions[v as usize]);
+            let normal = surface.vertex_normals[lp[i] as usize];
+            let (u, v) = ((b - a).reject_from(normal), (c - b).reject_from(normal));
+            let turn = crate::num::atan2(normal.dot(u.cross(v)), u.dot(v));
+            (turn > CORNER_TURN).then_some((turn, lp[i]))
+        })
+        .collect();
+    found.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    found.truncate(MAX_CORNERS);
+    found.into_iter().map(|x| x.1).collect()
+}
 
 /// An end of a run of points: position, normal, (arg w, |w|).
 type End = (DVec3, DVec3, DVec2);
