@@ -105,6 +105,8 @@ pub struct FaceInfo {
     /// Area of its facets, mm².
     pub area_mm2: f64,
     pub triangles: usize,
+    /// The largest facet-to-surface distance measured on it, mm.
+    pub chordal_error_mm: f64,
     /// Faces sharing an edge with it (all faces of the file, selected or not).
     pub adjacent: Vec<u64>,
 }
@@ -202,7 +204,36 @@ pub fn load(
     mesh_options: &MeshOptions,
     now: &dyn Fn() -> f64,
 ) -> Result<StepOutput, StepError> {
-    let (model, tess, [read_ms, tessellate_ms]) = read_and_tessellate(bytes, o, now)?;
+    let (model, tess, times) = read_and_tessellate(bytes, o, now)?;
+    load_tessellated(&model, tess, o, mesh_options, times)
+}
+
+/// [`load`] of a file already read and tessellated: `all` holds at least the faces `o.faces`
+/// (all the file's when `None`), `times` the read and tessellation milliseconds to report. A page
+/// that lists a file's faces and then plans on a selection tessellates it once.
+pub fn load_from(
+    model: &Model,
+    all: &Tessellation,
+    o: &StepOptions,
+    mesh_options: &MeshOptions,
+    times: [f64; 2],
+) -> Result<StepOutput, StepError> {
+    check_options(o)?;
+    let tess = match &o.faces {
+        Some(ids) => all.subset(ids)?,
+        None => all.clone(),
+    };
+    load_tessellated(model, tess, o, mesh_options, times)
+}
+
+/// [`load`] after the tessellation `tess` of the faces `o.faces` (all when `None`).
+fn load_tessellated(
+    model: &Model,
+    tess: Tessellation,
+    o: &StepOptions,
+    mesh_options: &MeshOptions,
+    times: [f64; 2],
+) -> Result<StepOutput, StepError> {
     let meshed = |tess: &Tessellation| {
         let trimesh = TriMesh { positions: tess.positions.clone(), triangles: tess.triangles.clone() };
         mesh::from_triangles(&trimesh, mesh_options)
@@ -210,14 +241,14 @@ pub fn load(
     let out = meshed(&tess)?;
     if o.faces.is_none() && out.report.closed {
         let top = top_faces(&tess, mesh_options)?;
-        let o = StepOptions { faces: Some(top), ..o.clone() };
-        let (tess, more_ms) = tessellate_model(&model, &o, now)?;
+        let tess = tess.subset(&top)?;
         let out = meshed(&tess)?;
-        let mut loaded = one_surface(&model, tess, out, &o, [read_ms, tessellate_ms + more_ms])?;
+        let o = StepOptions { faces: Some(top), ..o.clone() };
+        let mut loaded = one_surface(model, tess, out, &o, times)?;
         loaded.step.top_of_solid = true;
         return Ok(loaded);
     }
-    one_surface(&model, tess, out, o, [read_ms, tessellate_ms])
+    one_surface(model, tess, out, o, times)
 }
 
 /// The output of `tess` meshed as `out`, checked to be one open surface of all its facets.

@@ -150,6 +150,7 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
             loops: f.bounds.len(),
             area_mm2: area,
             triangles: tris.len(),
+            chordal_error_mm: err,
             adjacent: Vec::new(),
         });
     }
@@ -172,7 +173,62 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
         }
         info.adjacent = adj.into_iter().collect();
     }
-    Ok(Tessellation { positions, triangles, face_of_triangle, faces: infos, chordal_error_mm: chordal })
+    Ok(Tessellation { positions, triangles, face_of_triangle, faces: infos, chordal_error_mm: chordal }.numbered())
+}
+
+impl Tessellation {
+    /// The tessellation of faces `ids` (in that order, each once), cut out of this one: the same
+    /// as tessellating them alone, vertex for vertex (a face's facets depend only on the face and
+    /// the samples of its edges, and the vertices are numbered by first use in both), so a file
+    /// tessellated once serves every selection. Errors name an id that is not here.
+    pub fn subset(&self, ids: &[u64]) -> Result<Tessellation, StepError> {
+        let mut faces: Vec<FaceInfo> = Vec::new();
+        for id in ids {
+            let f = self
+                .faces
+                .iter()
+                .find(|f| f.id == *id)
+                .ok_or_else(|| StepError::UnknownFace { id: *id, faces: self.faces.iter().map(|f| f.id).collect() })?;
+            if !faces.iter().any(|g| g.id == f.id) {
+                faces.push(f.clone());
+            }
+        }
+        // Each face's triangles are one run, in face order.
+        let mut runs: BTreeMap<u64, (usize, usize)> = BTreeMap::new();
+        for (i, &f) in self.face_of_triangle.iter().enumerate() {
+            runs.entry(f).and_modify(|r| r.1 = i + 1).or_insert((i, i + 1));
+        }
+        let (mut triangles, mut face_of_triangle) = (Vec::new(), Vec::new());
+        for f in &faces {
+            let (a, b) = runs.get(&f.id).copied().unwrap_or((0, 0));
+            triangles.extend_from_slice(&self.triangles[a..b]);
+            face_of_triangle.resize(face_of_triangle.len() + (b - a), f.id);
+        }
+        let chordal_error_mm = faces.iter().map(|f| f.chordal_error_mm).fold(0.0, f64::max);
+        Ok(Tessellation { positions: self.positions.clone(), triangles, face_of_triangle, faces, chordal_error_mm }
+            .numbered())
+    }
+
+    /// The vertices renumbered by first use in the triangles (unused ones dropped).
+    fn numbered(self) -> Tessellation {
+        let mut index = vec![u32::MAX; self.positions.len()];
+        let mut positions = Vec::new();
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    let slot = &mut index[v as usize];
+                    if *slot == u32::MAX {
+                        *slot = positions.len() as u32;
+                        positions.push(self.positions[v as usize]);
+                    }
+                    *slot
+                })
+            })
+            .collect();
+        Tessellation { positions, triangles, ..self }
+    }
 }
 
 /// Appends the inner samples of the curve between parameters `t0` and `t1` to `out`.
@@ -391,7 +447,10 @@ fn mesh_face(
             Failure::NoEar => "its trimming loops cross or are degenerate in the surface's parameters".into(),
             Failure::NoBridge => "a hole cannot be joined to the outer loop (loops cross?)".into(),
             Failure::Budget => {
-                format!("the tolerance is not reached within 60 refinement rounds and {budget} triangles")
+                format!(
+                    "the tolerance is not reached within {} refinement rounds and {budget} triangles",
+                    triangulate::ROUNDS
+                )
             }
         },
     };

@@ -10,9 +10,11 @@
 
 mod coons;
 mod flank;
+mod step;
 
 pub use coons::{plan_coons, CoonsPlan};
 pub use flank::{plan_flank, FlankPlan};
+pub use step::{step_faces, StepFile};
 
 use std::sync::Once;
 
@@ -126,47 +128,6 @@ impl JsStepOptions {
 #[wasm_bindgen(js_name = isStep)]
 pub fn is_step(bytes: &[u8]) -> bool {
     crate::step::is_step(bytes)
-}
-
-/// The faces of a STEP file, tessellated: `{faces: [{id, surface, surface_id, loops, area_mm2,
-/// triangles, adjacent}], positions, triangles, face_of_triangle, chordal_error_mm, read_ms,
-/// tessellate_ms}` (snake_case keys as serde writes them), for the page to show and pick faces.
-/// `stepOptions` as in `Planner.fromStep`; `onProgress(step, done, total)` is called before
-/// reading and before tessellating.
-#[wasm_bindgen(js_name = stepFaces)]
-pub fn step_faces(
-    step: &[u8],
-    step_options: JsValue,
-    on_progress: Option<js_sys::Function>,
-) -> Result<JsValue, JsError> {
-    init();
-    let o = JsStepOptions::parse(step_options)?;
-    let mut progress = progress(&on_progress);
-    progress("reading STEP", 0, 2);
-    let t0 = now();
-    let model = crate::step::read(step).map_err(js_err)?;
-    let read_ms = now() - t0;
-    progress("tessellating faces", 1, 2);
-    let (t, tessellate_ms) = crate::step::tessellate_model(&model, &o, &now).map_err(js_err)?;
-    #[derive(Serialize)]
-    struct Faces {
-        faces: Vec<crate::step::FaceInfo>,
-        positions: Vec<f32>,
-        triangles: Vec<u32>,
-        face_of_triangle: Vec<u64>,
-        chordal_error_mm: f64,
-        read_ms: f64,
-        tessellate_ms: f64,
-    }
-    to_js(&Faces {
-        faces: t.faces,
-        positions: t.positions.iter().flat_map(|v| v.as_vec3().to_array()).collect(),
-        triangles: t.triangles.iter().flatten().copied().collect(),
-        face_of_triangle: t.face_of_triangle,
-        chordal_error_mm: t.chordal_error_mm,
-        read_ms,
-        tessellate_ms,
-    })
 }
 
 /// One loaded part: the mesh stage's output and the reusable planner (flattening and
@@ -322,6 +283,14 @@ struct SlitMapInfo<'a> {
     flipped_triangles: usize,
 }
 
+impl Planner {
+    /// A part of STEP faces, loaded.
+    fn from_step_output(loaded: crate::step::StepOutput) -> Planner {
+        let step_faces = Some(loaded.step.faces.iter().map(|f| f.id).collect());
+        Planner { output: Some(loaded.mesh), core: None, last_map: None, last_plan: None, step_faces }
+    }
+}
+
 #[wasm_bindgen]
 impl Planner {
     /// Reads an STL (binary or ASCII) and validates it. `options` is `undefined` or an object
@@ -345,8 +314,7 @@ impl Planner {
         let options = JsMeshOptions::parse(options)?;
         let step_options = JsStepOptions::parse(step_options)?;
         let loaded = crate::step::load(step, &step_options, &options, &now).map_err(js_err)?;
-        let step_faces = Some(loaded.step.faces.iter().map(|f| f.id).collect());
-        Ok(Planner { output: Some(loaded.mesh), core: None, last_map: None, last_plan: None, step_faces })
+        Ok(Planner::from_step_output(loaded))
     }
 
     /// STEP input: the ids of the faces the part is made of (the selection asked for, or, for a

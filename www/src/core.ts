@@ -2,7 +2,7 @@
 // Everything else imports the types and helpers it needs from here, never from ../pkg, so the
 // rest of the page does not depend on how the core is built. It runs inside the worker.
 
-import init, { Planner, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, stepFaces as coreStepFaces, version } from "../pkg/slitpath.js";
+import init, { Planner, StepFile as CoreStepFile, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, version } from "../pkg/slitpath.js";
 import type { FlankOptions, FlankOutput, FlankReport } from "./flank-types";
 import type { CoonsOptions, CoonsOutput, CoonsReport, StepFace, StepFacesOutput, StepOptions } from "./step-types";
 
@@ -280,6 +280,16 @@ export class Part {
   }
 
   /**
+   * The part made of faces `faces` of a STEP file already read (default: those it was read with,
+   * or a solid's top faces), without reading or tessellating it again; the same part as
+   * `openStep` makes of that selection. Throws naming the `#id` at fault.
+   */
+  static async fromStepModel(model: StepModel, options?: MeshOptions, faces?: number[]): Promise<Part> {
+    await initCore();
+    return new Part(Planner.fromStepFile(model.file, options, faces === undefined ? undefined : Float64Array.from(faces)));
+  }
+
+  /**
    * Builds the planner now (rim refinement, flattening, slit-map factorisation, facet index),
    * reporting each step; throws for a surface that cannot be planned (closed, genus > 0).
    */
@@ -387,28 +397,57 @@ export async function isStep(bytes: Uint8Array): Promise<boolean> {
   return coreIsStep(bytes);
 }
 
+/**
+ * A STEP file read and tessellated once (all its faces, or `stepOptions.faces`): its faces for a
+ * page to list and pick, and parts of any selection of them (`Part.fromStepModel`). Holds wasm
+ * memory until `free()`.
+ */
+export class StepModel {
+  /** The core's handle (for `Part.fromStepModel`). */
+  private constructor(readonly file: CoreStepFile) {}
+
+  /** Reads and tessellates `step`; throws an Error naming the `#id` at fault. */
+  static async open(step: Uint8Array, stepOptions?: StepOptions, onProgress?: ProgressCallback): Promise<StepModel> {
+    await initCore();
+    return new StepModel(new CoreStepFile(step, stepOptions, onProgress));
+  }
+
+  /** The faces and their tessellation. */
+  faces(): StepFacesOutput {
+    const out = this.file.faces() as {
+      faces: StepFace[];
+      positions: number[];
+      triangles: number[];
+      face_of_triangle: number[];
+      chordal_error_mm: number;
+      read_ms: number;
+      tessellate_ms: number;
+    };
+    // The arrays stay as the core serialised them: stepDrawing reads each once into its own.
+    return {
+      faces: out.faces,
+      positions: out.positions,
+      triangles: out.triangles,
+      faceOfTriangle: out.face_of_triangle,
+      chordalErrorMm: out.chordal_error_mm,
+      readMs: out.read_ms,
+      tessellateMs: out.tessellate_ms,
+    };
+  }
+
+  free(): void {
+    this.file.free();
+  }
+}
+
 /** The faces of a STEP file, tessellated (all, or `stepOptions.faces`); throws naming the `#id` at fault. */
 export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onProgress?: ProgressCallback): Promise<StepFacesOutput> {
-  await initCore();
-  const out = coreStepFaces(step, stepOptions, onProgress) as {
-    faces: StepFace[];
-    positions: number[];
-    triangles: number[];
-    face_of_triangle: number[];
-    chordal_error_mm: number;
-    read_ms: number;
-    tessellate_ms: number;
-  };
-  // The arrays stay as the core serialised them: stepDrawing reads each once into its own.
-  return {
-    faces: out.faces,
-    positions: out.positions,
-    triangles: out.triangles,
-    faceOfTriangle: out.face_of_triangle,
-    chordalErrorMm: out.chordal_error_mm,
-    readMs: out.read_ms,
-    tessellateMs: out.tessellate_ms,
-  };
+  const model = await StepModel.open(step, stepOptions, onProgress);
+  try {
+    return model.faces();
+  } finally {
+    model.free();
+  }
 }
 
 /**

@@ -26,6 +26,8 @@ export interface StepFace {
   loops: number;
   area_mm2: number;
   triangles: number;
+  /** The largest facet-to-surface distance measured on it, mm. */
+  chordal_error_mm: number;
   /** Faces sharing an edge with it. */
   adjacent: number[];
 }

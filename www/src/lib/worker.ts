@@ -6,7 +6,7 @@
 // `self` is typed with the DOM lib (the page's tsconfig); postMessage(message, { transfer }) and
 // the "message" event have the same shape on a DedicatedWorkerGlobalScope.
 
-import { Part, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, isStep, planCoons, planFlank, stepFaces, type MeshOptions, type PlanOutput, type StepFace, type StepOptions } from "../core";
+import { Part, StepModel, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, isStep, planCoons, planFlank, type MeshOptions, type PlanOutput, type StepFace, type StepOptions } from "../core";
 import { coonsDrawing } from "./coons-drawing";
 import { DEFAULT_PLAN_OPTIONS } from "./defaults";
 import { circles, extent, heatColours, loopEdges, pathPolyline, planar, type Polyline } from "./drawing";
@@ -35,8 +35,14 @@ let current:
     }
   | undefined;
 
-/** The STEP file loaded last (its faces can be chosen again, and the Coons band reads it). */
-let stepFile: { bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
+/**
+ * The STEP file loaded last, read and tessellated once: its faces can be chosen again, and the
+ * Coons band reads its bytes.
+ */
+let stepFile: { model: StepModel; bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
+
+/** A part made of STEP faces: the file read once, and the options with the faces asked for (none: the file's top). */
+type StepSource = { model: StepModel; stepOptions: StepOptions };
 
 /** A STEP file could be read but not made the part with the faces asked for: the faces go with the error. */
 class SelectionError extends Error {
@@ -78,6 +84,7 @@ function centroid(uv: Float64Array): [number, number] {
 async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<void> {
   const bytes = new Uint8Array(request.bytes);
   if (!(await isStep(bytes))) {
+    stepFile?.model.free();
     stepFile = undefined;
     return loadPart(request.id, request.name, bytes, request.meshOptions, undefined, null);
   }
@@ -86,7 +93,8 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
   const stepOptions = request.stepOptions ?? {};
   // The faces list and view show all the file's faces; the part is made of those asked for.
   const { faces: _, ...allFaces } = stepOptions;
-  const read = await stepFaces(bytes, allFaces, progress);
+  const model = await StepModel.open(bytes, allFaces, progress);
+  const read = model.faces();
   progress("preparing the face view", 2);
   const step: StepPart = {
     name: request.name,
@@ -96,9 +104,10 @@ async function load(request: Extract<WorkerRequest, { type: "load" }>): Promise<
     readMs: read.readMs,
     tessellateMs: read.tessellateMs,
   };
-  stepFile = { bytes, name: request.name, meshOptions: request.meshOptions, stepOptions: allFaces, faces: read.faces };
+  stepFile?.model.free();
+  stepFile = { model, bytes, name: request.name, meshOptions: request.meshOptions, stepOptions: allFaces, faces: read.faces };
   try {
-    await loadPart(request.id, request.name, bytes, request.meshOptions, stepOptions, step, started);
+    await loadPart(request.id, request.name, bytes, request.meshOptions, { model, stepOptions }, step, started);
   } catch (error) {
     if (isFatal(error)) throw error;
     throw new SelectionError(errorMessage(error), step);
@@ -113,18 +122,17 @@ async function selectFaces(request: Extract<WorkerRequest, { type: "selectFaces"
   const unknown = request.faces.find((f) => !known.has(f));
   if (unknown !== undefined) throw new Error(`face #${unknown} is not a face of ${stepFile.name}`);
   // The load's tessellation options (chordal tolerance, edge and triangle limits) stay.
-  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { ...stepFile.stepOptions, faces: request.faces }, null);
+  await loadPart(request.id, stepFile.name, stepFile.bytes, stepFile.meshOptions, { model: stepFile.model, stepOptions: { ...stepFile.stepOptions, faces: request.faces } }, null);
 }
 
-async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions: MeshOptions | undefined, stepOptions: StepOptions | undefined, step: StepPart | null, started = performance.now()): Promise<void> {
+async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions: MeshOptions | undefined, source: StepSource | undefined, step: StepPart | null, started = performance.now()): Promise<void> {
   // Progress over every step before planning: the core's (read, checks; refinement, flattening,
   // factorisation, facet index), then the preview map and the views' arrays.
   let offset = 0;
   const TOTAL = 8;
   const progress = (stage: string, done: number) => post({ type: "progress", id, stage, done: offset + done, total: TOTAL });
-  const isStepPart = stepOptions !== undefined;
-  if (isStepPart) progress("meshing the selected faces", 1);
-  const part = isStepPart ? await Part.openStep(bytes, meshOptions, stepOptions) : await Part.open(bytes, meshOptions, progress);
+  if (source) progress("meshing the selected faces", 1);
+  const part = source ? await Part.fromStepModel(source.model, meshOptions, source.stepOptions.faces) : await Part.open(bytes, meshOptions, progress);
   current?.part.free();
   current = undefined;
   offset = 2;
@@ -150,14 +158,14 @@ async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions
     name: partName(name),
     bytes,
     meshOptions,
-    stepOptions,
+    stepOptions: source?.stepOptions,
     positions,
     triangles: triangles.slice(),
     uv,
     w: previewW,
     locator: null,
   };
-  const stepIds = isStepPart ? part.stepFaces() : null;
+  const stepIds = source ? part.stepFaces() : null;
   const loaded: LoadedPart = {
     name,
     report: part.report(),
