@@ -255,7 +255,9 @@ impl FaceTree {
         if !search {
             return ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false };
         }
-        while let Some(hit) = self.nearest(c, limit) {
+        // Most balls are clear already: the early-exit test settles those without the nearest
+        // point (the same predicate, distance < limit).
+        while let Some(hit) = if self.point_nearer_than(c, limit) { self.nearest(c, limit) } else { None } {
             if rounds == CLEAR_ROUNDS {
                 return ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: true };
             }
