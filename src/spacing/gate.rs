@@ -7,9 +7,10 @@
 //! rings skip), and round the ends of holes, where the rings turn. So the points tested are
 //! points along every edge in the band, along lines |w| = const across every face of it (at
 //! least seven, three with lifted balls, at most [`STRIP`]·R apart on the surface) and on fine
-//! polar grids round each hole's ends and the outer loop's convex corners. A point is cut when its S^h point lies within R of the ball-centre polyline of
-//! one of the two rings, so a gap the meridians missed is found wherever it is (stop 18 measured
-//! such gaps at up to 1.3 h on the shared meshes). With exact facets the polylines' centres are
+//! polar grids round each hole's ends and the outer loop's convex corners. A point is cut when
+//! its S^h point lies within R of the ball-centre polyline of one of the two rings, so a gap the
+//! meridians missed is found wherever it is (stop 18 measured such gaps at up to 1.3 h on the
+//! shared meshes). With exact facets the polylines' centres are
 //! moved out by the lift the spacing plans for each ball (see `Spacer::lift_mm`).
 //!
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
@@ -66,7 +67,8 @@ pub(super) struct Gate<'a> {
     /// |w|) of both ends, the second angle within π of the first; an edge on a crease where the
     /// normals split is there once per side.
     edges: Vec<GateEdge>,
-    /// Points round the ends of every hole and the outer loop's corners (see [`tip_points`]), by |w|.
+    /// Points round the ends of every hole and the outer loop's corners (see [`tip_points`]),
+    /// by |w|.
     tips: Vec<GatePoint>,
     /// Faces and edges by |w| (see [`ByRadius`]).
     face_index: ByRadius,
