@@ -766,19 +766,46 @@ impl<'a> Spacer<'a> {
         // Lifted as the spiral lifts the ring, each point near the face of the one before: where
         // the P1 image overlaps itself (below a slit tip) the nearest-image lift can pick a face
         // the spiral's continuous walk never visits, and the gate would test a ring not cut.
-        let centre = |t: f64, near: Option<u32>| -> Result<(DVec3, u32, DVec3), SpacingError> {
-            let l = match near {
+        let contact = |t: f64, near: Option<u32>| -> Result<Lifted, SpacingError> {
+            match near {
                 Some(f) => self.lift.polar_near(rho, t, f),
                 None => self.lift.polar(rho, t),
             }
-            .ok_or(SpacingError::Lift { rho, theta: t })?;
+            .ok_or(SpacingError::Lift { rho, theta: t })
+        };
+        let centre = |t: f64, near: Option<u32>| -> Result<(DVec3, u32, DVec3), SpacingError> {
+            let l = contact(t, near)?;
             Ok((self.ball_centre(&l), l.face, l.p))
         };
         let angle = |i: usize| TAU * i as f64 / M as f64;
-        let mut base: Vec<(DVec3, u32, DVec3)> = Vec::with_capacity(M + 1);
+        let mut contacts: Vec<Lifted> = Vec::with_capacity(M + 1);
         for i in 0..=M {
-            base.push(centre(angle(i), base.last().map(|b| b.1))?);
+            contacts.push(contact(angle(i), contacts.last().map(|l| l.face))?);
         }
+        // With `focus`, a step whose centres on the surface's offset (the lift moves them by at
+        // most LIFT_CAP·h) lie farther than 3R and twice that from every focus point is neither
+        // refined nor near one of them whatever its lift: its ends keep the offset's centres, and
+        // the clearance search (most of the spacing's time) runs only where the test looks.
+        let unlifted = |l: &Lifted| l.p + l.n * self.ball;
+        let lifted_ends: Vec<bool> = match focus {
+            None => vec![true; M + 1],
+            Some(f) => {
+                let reach = 3.0 * self.ball + 2.0 * self.lift_h.map_or(0.0, |h| LIFT_CAP * h);
+                let mut ends = vec![false; M + 1];
+                for i in 0..M {
+                    let (a, b) = (unlifted(&contacts[i]), unlifted(&contacts[i + 1]));
+                    if f.iter().any(|q| segment_dist2(*q, a, b) <= reach * reach) {
+                        ends[i] = true;
+                        ends[i + 1] = true;
+                    }
+                }
+                ends
+            }
+        };
+        let base: Vec<(DVec3, u32, DVec3)> = crate::par::each(M + 1, |i| {
+            let l = &contacts[i];
+            (if lifted_ends[i] { self.ball_centre(l) } else { unlifted(l) }, l.face, l.p)
+        });
         let (tol, chord) = (GATE_SAG * self.options.scallop_mm, 0.5 * self.ball);
         // Each uniform step refined on its own (in parallel): its start and the ends of its
         // pieces, in order.
