@@ -173,7 +173,8 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
         }
         info.adjacent = adj.into_iter().collect();
     }
-    Ok(Tessellation { positions, triangles, face_of_triangle, faces: infos, chordal_error_mm: chordal }.numbered())
+    let (positions, triangles) = numbered(&positions, &triangles);
+    Ok(Tessellation { positions, triangles, face_of_triangle, faces: infos, chordal_error_mm: chordal })
 }
 
 impl Tessellation {
@@ -205,30 +206,30 @@ impl Tessellation {
             face_of_triangle.resize(face_of_triangle.len() + (b - a), f.id);
         }
         let chordal_error_mm = faces.iter().map(|f| f.chordal_error_mm).fold(0.0, f64::max);
-        Ok(Tessellation { positions: self.positions.clone(), triangles, face_of_triangle, faces, chordal_error_mm }
-            .numbered())
+        let (positions, triangles) = numbered(&self.positions, &triangles);
+        Ok(Tessellation { positions, triangles, face_of_triangle, faces, chordal_error_mm })
     }
+}
 
-    /// The vertices renumbered by first use in the triangles (unused ones dropped).
-    fn numbered(self) -> Tessellation {
-        let mut index = vec![u32::MAX; self.positions.len()];
-        let mut positions = Vec::new();
-        let triangles = self
-            .triangles
-            .iter()
-            .map(|t| {
-                t.map(|v| {
-                    let slot = &mut index[v as usize];
-                    if *slot == u32::MAX {
-                        *slot = positions.len() as u32;
-                        positions.push(self.positions[v as usize]);
-                    }
-                    *slot
-                })
+/// `triangles` with their vertices renumbered by first use, and those vertices of `positions`
+/// (unused ones dropped).
+fn numbered(positions: &[DVec3], triangles: &[[u32; 3]]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut index = vec![u32::MAX; positions.len()];
+    let mut out = Vec::new();
+    let triangles = triangles
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                let slot = &mut index[v as usize];
+                if *slot == u32::MAX {
+                    *slot = out.len() as u32;
+                    out.push(positions[v as usize]);
+                }
+                *slot
             })
-            .collect();
-        Tessellation { positions, triangles, ..self }
-    }
+        })
+        .collect();
+    (out, triangles)
 }
 
 /// Appends the inner samples of the curve between parameters `t0` and `t1` to `out`.

@@ -196,27 +196,22 @@ pub fn refine(
     };
     flip(d, tris);
     // Each triangle's error, by its sorted corners: most survive a round unchanged.
+    let corners = |mut t: [u32; 3]| {
+        t.sort_unstable();
+        t
+    };
     let mut errors: HashMap<[u32; 3], f64> = HashMap::new();
     for _ in 0..ROUNDS {
         let bad: Vec<bool> = tris
             .iter()
             .map(|&t| {
                 let long = (0..3).any(|k| (d.p[t[k] as usize] - d.p[t[(k + 1) % 3] as usize]).length() > max_edge);
-                let mut sorted = t;
-                sorted.sort_unstable();
-                let err = *errors.entry(sorted).or_insert_with(|| chordal_error(d, t, &SAMPLES, eval));
+                let err = *errors.entry(corners(t)).or_insert_with(|| chordal_error(d, t, &SAMPLES, eval));
                 long || err > tol
             })
             .collect();
         if !bad.contains(&true) {
-            return Ok(tris
-                .iter()
-                .map(|&t| {
-                    let mut sorted = t;
-                    sorted.sort_unstable();
-                    errors[&sorted]
-                })
-                .fold(0.0, f64::max));
+            return Ok(tris.iter().map(|&t| errors[&corners(t)]).fold(0.0, f64::max));
         }
         if tris.len() > budget {
             return Err(Failure::Budget);
