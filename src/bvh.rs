@@ -155,9 +155,19 @@ impl Walk {
 
     /// The next leaf's slots, `start..start + count`.
     pub(crate) fn next_leaf(&mut self, nodes: &[Node], mut prune: impl FnMut(&Node) -> bool) -> Option<Range<usize>> {
+        self.next_leaf_at(nodes, |_, node| prune(node))
+    }
+
+    /// [`Walk::next_leaf`] with the pruning test given the node's index too (for bounds kept
+    /// beside the nodes).
+    pub(crate) fn next_leaf_at(
+        &mut self,
+        nodes: &[Node],
+        mut prune: impl FnMut(usize, &Node) -> bool,
+    ) -> Option<Range<usize>> {
         while let Some(index) = self.stack.pop() {
             let node = &nodes[index as usize];
-            if prune(node) {
+            if prune(index as usize, node) {
                 continue;
             }
             if node.count == 0 {

@@ -5,8 +5,9 @@
 //!
 //! The toolpath asks this for every ball centre and every straight move between two (is any
 //! facet closer than the ball radius?), so a query must touch only the faces near it: the tree
-//! is traversed nearer box first and pruned by the best distance so far, and a face is tested
-//! by its plane and its bounding sphere before its closest point. Deterministic: the same mesh
+//! is traversed nearer box first and pruned by the best distance so far (each node's box, and
+//! its box in the frame of its faces' mean normal, [`Oriented`]), and a face is tested by its
+//! plane and its bounding sphere before its closest point. Deterministic: the same mesh
 //! builds the same tree, and ties between faces at equal distance go to the lower face index.
 
 use crate::bvh::{self, Node, Stack, Walk};
@@ -36,6 +37,58 @@ pub struct FaceTree {
     pub(super) spheres: Vec<(DVec3, f64)>,
     /// Slot of each face.
     slot_of: Vec<u32>,
+    /// Each node's box in a frame of its faces' mean normal ([`Oriented`]).
+    oriented: Vec<Oriented>,
+}
+
+/// A node's faces bounded in a frame whose third axis is their area-weighted mean normal: a
+/// patch of surface is thin along its normal, where its axis-aligned box is as thick as the
+/// patch is tilted. A ball resting on the surface is within R of the axis-aligned boxes of every
+/// tilted patch round it, but within R of few of these; either box's distance is a lower bound
+/// of the faces', so the queries prune by the larger (the same faces are found).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Oriented {
+    axes: [DVec3; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Oriented {
+    /// The node of `corners` (all of its slots).
+    fn new(corners: &[[DVec3; 3]]) -> Self {
+        let n = corners.iter().fold(DVec3::ZERO, |s, &[a, b, c]| s + (b - a).cross(c - a)).normalize_or_zero();
+        let axes = if n == DVec3::ZERO {
+            [DVec3::X, DVec3::Y, DVec3::Z]
+        } else {
+            let t = n.any_orthonormal_vector();
+            [t, n.cross(t), n]
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in corners.iter().flatten() {
+            for k in 0..3 {
+                let x = axes[k].dot(*p);
+                lo[k] = lo[k].min(x);
+                hi[k] = hi[k].max(x);
+            }
+        }
+        // Widened by far more than the rounding of the projections (about 1e-16 of the
+        // coordinates), so that no face at a query's exact bound is pruned.
+        let scale = corners.iter().flatten().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+        let pad = 1e-12 * scale;
+        Self { axes, lo: lo.map(|x| x - pad), hi: hi.map(|x| x + pad) }
+    }
+
+    /// Squared distance from `p` to the box (0 inside): a lower bound of its faces'.
+    #[inline]
+    fn distance2(&self, p: DVec3) -> f64 {
+        let mut d2 = 0.0;
+        for k in 0..3 {
+            let x = self.axes[k].dot(p);
+            let d = (self.lo[k] - x).max(x - self.hi[k]).max(0.0);
+            d2 += d * d;
+        }
+        d2
+    }
 }
 
 /// The point of the mesh nearest to a query.
@@ -83,7 +136,24 @@ impl FaceTree {
         for (slot, &f) in order.iter().enumerate() {
             slot_of[f as usize] = slot as u32;
         }
-        Self { nodes, order, corners, planes, spheres, slot_of }
+        // Each node's slots: a leaf's own, an inner node's from its first slot to its right
+        // child's last (children follow their parent in the array).
+        let mut ends = vec![0u32; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            let node = &nodes[i];
+            ends[i] = if node.count > 0 { node.start + node.count } else { ends[node.right as usize] };
+        }
+        let oriented =
+            crate::par::each(nodes.len(), |i| Oriented::new(&corners[nodes[i].start as usize..ends[i] as usize]));
+        Self { nodes, order, corners, planes, spheres, slot_of, oriented }
+    }
+
+    /// A lower bound of the squared distance from `p` to the faces of node `index`: the larger
+    /// of its two boxes' (the oriented one is tested only when the axis-aligned one is nearer).
+    #[inline]
+    fn node_distance2(&self, index: usize, node: &Node, p: DVec3) -> f64 {
+        let d2 = node.distance2(p);
+        d2.max(self.oriented[index].distance2(p))
     }
 
     /// Whether some facet is nearer than `limit` to `p`: [`FaceTree::nearest`]`(p, limit).is_some()`,
@@ -91,7 +161,7 @@ impl FaceTree {
     pub fn point_nearer_than(&self, p: DVec3, limit: f64) -> bool {
         let limit2 = limit * limit;
         let mut walk = Walk::new(&self.nodes);
-        while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(p) > limit2) {
+        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_distance2(i, node, p) > limit2) {
             for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let d = n.dot(p) - offset;
@@ -122,7 +192,7 @@ impl FaceTree {
         let reach = limit + half;
         let (limit2, reach2) = (limit * limit, reach * reach);
         let mut walk = Walk::new(&self.nodes);
-        while let Some(slots) = walk.next_leaf(&self.nodes, |node| node.distance2(mid) > reach2) {
+        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_distance2(i, node, mid) > reach2) {
             for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
@@ -145,7 +215,7 @@ impl FaceTree {
         let mut bound2 = max_distance * max_distance;
         let mut stack = Stack::new((0u32, 0.0f64));
         if let Some(root) = self.nodes.first() {
-            stack.push((0, root.distance2(p)));
+            stack.push((0, self.node_distance2(0, root, p)));
         }
         while let Some((index, d2)) = stack.pop() {
             if d2 > bound2 {
@@ -176,8 +246,8 @@ impl FaceTree {
                 continue;
             }
             let (left, right) = (index + 1, node.right);
-            let dl = self.nodes[left as usize].distance2(p);
-            let dr = self.nodes[right as usize].distance2(p);
+            let dl = self.node_distance2(left as usize, &self.nodes[left as usize], p);
+            let dr = self.node_distance2(right as usize, &self.nodes[right as usize], p);
             // Nearer child last, so it is taken first and tightens the bound early.
             if dl <= dr {
                 stack.push((right, dr));
@@ -469,6 +539,52 @@ mod tests {
             }
         }
         assert!(found > 200 && missed > 200, "found {found}, beyond the radius {missed}");
+    }
+
+    /// Balls resting on a tilted, curved surface, where the oriented boxes prune what the
+    /// axis-aligned ones keep: the tree's answers are brute force's, within, at and beyond R,
+    /// and every leaf's oriented box is no farther than its nearest face.
+    #[test]
+    fn balls_resting_on_the_surface_find_the_brute_force_facets() {
+        let mut mesh = fixtures::saddle_2_holes();
+        // Tilted 35° about a skew axis, so the patches' boxes are thick.
+        let turn = glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.6);
+        mesh.positions.iter_mut().for_each(|p| *p = turn * *p);
+        let tree = FaceTree::new(&mesh.positions, &mesh.triangles);
+        let mut rng = SplitMix64(7);
+        let mut next = || rng.unit();
+        let mut seen = [0usize; 2];
+        for (f, t) in mesh.triangles.iter().enumerate().step_by(3) {
+            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            let n = (b - a).cross(c - a).normalize();
+            let (u, v) = (next(), next());
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let r = 0.5 + 3.0 * next();
+            // On the face's offset, just above and just below it.
+            let p = a + (b - a) * u + (c - a) * v + n * r * (1.0 + 2e-3 * (next() - 0.5));
+            let limit = r * (1.0 - 1e-9);
+            let (face, d) = nearest_brute(&mesh.positions, &mesh.triangles, p);
+            let near = tree.nearest(p, limit);
+            assert_eq!(tree.point_nearer_than(p, limit), near.is_some(), "face {f}");
+            match near {
+                Some(hit) => assert!(hit.face == face || (hit.distance - d).abs() <= 1e-12 * d, "face {f}"),
+                None => assert!(d >= limit, "face {f}: missed a facet at {d} < {limit}"),
+            }
+            seen[near.is_some() as usize] += 1;
+            // Every node's oriented box is a lower bound of its faces' distances.
+            for (i, node) in tree.nodes.iter().enumerate().filter(|(_, n)| n.count > 0) {
+                let slots = node.start as usize..(node.start + node.count) as usize;
+                let least = slots
+                    .map(|s| {
+                        let [a, b, c] = tree.corners[s];
+                        let bary = closest_on_triangle(p, a, b, c);
+                        (a * bary[0] + b * bary[1] + c * bary[2]).distance_squared(p)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!(tree.oriented[i].distance2(p) <= least, "node {i}");
+            }
+        }
+        assert!(seen.iter().all(|&k| k > 50), "{seen:?}");
     }
 
     #[test]
