@@ -402,3 +402,91 @@ fn a_cone_closed_by_a_vertex_loop_at_its_apex_tessellates() {
         step::load(fx::cone_nose().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
     assert_eq!(out.mesh.surface.loops.len(), 1);
 }
+
+/// PCURVEs (issue 36: "PCURVEs where present, projection where not"): the edges of a B-spline
+/// face take their parameters from their pcurves (a 2D line and a non-uniform B-spline at the 3D
+/// curve's parameters, a reversed, non-uniformly parameterised one by locating each sample on
+/// it), and a pcurve that lies off its edge is refused: that edge is projected.
+#[test]
+fn pcurves_give_the_boundary_parameters_and_a_lying_one_falls_back_to_projection() {
+    let text = fx::field_pcurves();
+    let o = StepOptions::default();
+    let (model, t) = tess(&text, &o);
+    let face = &model.faces[0];
+    let s = &face.surface;
+    let loops = step::tessellate::boundary(&model, face.id, &o).unwrap();
+    assert_eq!(loops.len(), 1);
+    let l = &loops[0];
+    assert_eq!((l.pcurve_edges, l.pcurves_off_surface), (3, 1));
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (3, 1));
+    // The loop's edges and their pcurves, in loop order (y = 0, x = 60, y = 40, x = 0).
+    let pcurve_of = |k: usize| model.edges[&face.bounds[0].edges[k].0].pcurves[0].id;
+    let (mut lines, mut greville, mut reversed, mut projected) = (0, 0, 0, 0);
+    for ((p, w), src) in l.points.iter().zip(&l.uv).zip(&l.pcurve) {
+        // Every sample's parameters map onto it (the guard: a tenth of the chordal tolerance).
+        assert!((s.point(*w) - *p).length() <= 0.1 * o.chordal_tol_mm, "{p} at {w}");
+        let (u, v) = (p.x / fx::FIELD_MM[0], p.y / fx::FIELD_MM[1]);
+        match *src {
+            // The 2D line v = 0, u = t: exactly the pcurve's values.
+            Some(id) if id == pcurve_of(0) => {
+                assert_eq!(w.y, 0.0);
+                assert!((w.x - u).abs() < 1e-12, "{w} vs {u}");
+                lines += 1;
+            }
+            // The B-spline on knots (0, 0.3, 1): u = 1 exactly, v = t.
+            Some(id) if id == pcurve_of(1) => {
+                assert_eq!(w.x, 1.0);
+                assert!((w.y - v).abs() < 1e-12, "{w} vs {v}");
+                greville += 1;
+            }
+            // The reversed one (v = 1 − s²): located, u = 0 exactly.
+            Some(id) if id == pcurve_of(3) => {
+                assert_eq!(w.x, 0.0);
+                assert!((w.y - v).abs() < 1e-9, "{w} vs {v}");
+                reversed += 1;
+            }
+            Some(id) => panic!("pcurve #{id} used: it lies 4 mm off its edge"),
+            // The lying pcurve's edge (y = 40), projected: v = 1, not its 0.9.
+            None => {
+                assert!((w.y - 1.0).abs() < 1e-9 && (w.x - u).abs() < 1e-9, "{w}");
+                projected += 1;
+            }
+        }
+    }
+    assert!(lines > 2 && greville > 2 && reversed > 2 && projected > 2, "{lines} {greville} {reversed} {projected}");
+    // The face tessellates as the same surface without pcurves does, within the tolerance.
+    let (_, plain) = tess(&fx::bspline_patch(), &o);
+    assert!(t.chordal_error_mm <= o.chordal_tol_mm);
+    assert!(t.positions.iter().all(|p| (p.z - fx::height(p.x, p.y)).abs() < 1e-9));
+    let area: f64 = t.faces[0].area_mm2;
+    assert!((area - plain.faces[0].area_mm2).abs() < 1e-6 * area, "{area} vs {}", plain.faces[0].area_mm2);
+    assert_eq!((plain.faces[0].pcurve_edges, plain.faces[0].pcurves_off_surface), (0, 0));
+}
+
+/// A closed B-spline tube with a seam edge used twice: its SEAM_CURVE's two pcurves give the
+/// seam's two sides (u = 0 and u = 1), which projection cannot tell apart.
+#[test]
+fn a_seam_edge_of_a_closed_bspline_takes_each_side_from_its_own_pcurve() {
+    let o = StepOptions::default();
+    let (model, t) = tess(&fx::bspline_tube(true), &o);
+    let (r, h) = fx::TUBE_MM;
+    assert_eq!(t.faces[0].surface, "rational b-spline");
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (4, 0));
+    let area = t.faces[0].area_mm2;
+    let exact = std::f64::consts::TAU * r * h;
+    assert!((area - exact).abs() < 1e-3 * exact && area < exact, "area {area} vs {exact}");
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.y).length() - r).abs()) <= 1.1 * o.chordal_tol_mm);
+    // The seam's samples: the first use on u = 1, the second on u = 0.
+    let face = &model.faces[0];
+    let l = &step::tessellate::boundary(&model, face.id, &o).unwrap()[0];
+    let on_seam: Vec<f64> =
+        l.points.iter().zip(&l.uv).filter(|(p, _)| p.y.abs() < 1e-9 && p.x > 0.0).map(|(_, w)| w.x).collect();
+    assert!(on_seam.contains(&1.0) && on_seam.contains(&0.0), "{on_seam:?}");
+    assert!(on_seam.iter().all(|&u| u == 0.0 || u == 1.0), "{on_seam:?}");
+    // Welded across the seam: one band, the boundary only the two circles.
+    let out = step::load(fx::bspline_tube(true).as_bytes(), &o, &MeshOptions::default(), &|| 0.0).unwrap();
+    assert_eq!(out.mesh.report.boundary_loops, 2);
+    // Without the pcurves both sides of the seam project to the same parameters.
+    let plain = step::read_and_tessellate(fx::bspline_tube(false).as_bytes(), &o, &|| 0.0);
+    assert!(matches!(plain, Err(StepError::Tessellation { .. })), "{:?}", plain.map(|x| x.1.triangles.len()));
+}
