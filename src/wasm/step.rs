@@ -10,7 +10,7 @@ use super::{init, js_err, now, progress, to_js, JsMeshOptions, JsStepOptions, Pl
 use crate::step::{Model, StepOptions, Tessellation};
 
 /// The faces of a STEP file, tessellated: `{faces: [{id, surface, surface_id, loops, area_mm2,
-/// triangles, chordal_error_mm, adjacent}], positions, triangles, face_of_triangle,
+/// triangles, chordal_error_mm, pcurve_edges, pcurves_off_surface, adjacent}], positions, triangles, face_of_triangle,
 /// chordal_error_mm, read_ms, tessellate_ms}` (snake_case keys as serde writes them), for the page
 /// to show and pick faces. `stepOptions` as in `Planner.fromStep`; `onProgress(step, done,
 /// total)` is called before reading and before tessellating. `new StepFile(…).faces()` gives the
