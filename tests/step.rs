@@ -490,3 +490,89 @@ fn a_seam_edge_of_a_closed_bspline_takes_each_side_from_its_own_pcurve() {
     let plain = step::read_and_tessellate(fx::bspline_tube(false).as_bytes(), &o, &|| 0.0);
     assert!(matches!(plain, Err(StepError::Tessellation { .. })), "{:?}", plain.map(|x| x.1.triangles.len()));
 }
+
+/// A cylinder face as OpenCascade writes it (a seam edge used twice, SEAM_CURVE with its two
+/// pcurves, circles with theirs), in a file whose plane-angle unit is the degree: the pcurves'
+/// angles are read in degrees (u = 0 and u = 360 on the seam) and all four edge uses take them.
+const DEGREE_CYLINDER: &str = "ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION((''),'2;1');
+FILE_NAME('cylinder','',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));
+ENDSEC;
+DATA;
+#1 = ADVANCED_FACE('',(#2),#10,.T.);
+#2 = FACE_OUTER_BOUND('',#3,.T.);
+#3 = EDGE_LOOP('',(#4,#5,#6,#7));
+#4 = ORIENTED_EDGE('',*,*,#20,.T.);
+#5 = ORIENTED_EDGE('',*,*,#21,.F.);
+#6 = ORIENTED_EDGE('',*,*,#20,.F.);
+#7 = ORIENTED_EDGE('',*,*,#22,.T.);
+#10 = CYLINDRICAL_SURFACE('',#11,10.);
+#11 = AXIS2_PLACEMENT_3D('',#12,#13,#14);
+#12 = CARTESIAN_POINT('',(0.,0.,0.));
+#13 = DIRECTION('',(0.,0.,1.));
+#14 = DIRECTION('',(1.,0.,0.));
+#20 = EDGE_CURVE('',#30,#31,#40,.T.);
+#21 = EDGE_CURVE('',#31,#31,#41,.T.);
+#22 = EDGE_CURVE('',#30,#30,#42,.T.);
+#30 = VERTEX_POINT('',#32);
+#31 = VERTEX_POINT('',#33);
+#32 = CARTESIAN_POINT('',(10.,0.,0.));
+#33 = CARTESIAN_POINT('',(10.,0.,5.));
+#40 = SEAM_CURVE('',#50,(#60,#61),.PCURVE_S1.);
+#50 = LINE('',#32,#51);
+#51 = VECTOR('',#13,1.);
+#60 = PCURVE('',#10,#62);
+#61 = PCURVE('',#10,#63);
+#62 = DEFINITIONAL_REPRESENTATION('',(#64),#99);
+#63 = DEFINITIONAL_REPRESENTATION('',(#65),#99);
+#64 = LINE('',#66,#67);
+#65 = LINE('',#69,#67);
+#66 = CARTESIAN_POINT('',(0.,0.));
+#67 = VECTOR('',#68,1.);
+#68 = DIRECTION('',(0.,1.));
+#69 = CARTESIAN_POINT('',(360.,0.));
+#41 = SURFACE_CURVE('',#52,(#70),.PCURVE_S1.);
+#52 = CIRCLE('',#53,10.);
+#53 = AXIS2_PLACEMENT_3D('',#54,#13,#14);
+#54 = CARTESIAN_POINT('',(0.,0.,5.));
+#70 = PCURVE('',#10,#71);
+#71 = DEFINITIONAL_REPRESENTATION('',(#72),#99);
+#72 = LINE('',#73,#74);
+#73 = CARTESIAN_POINT('',(0.,5.));
+#74 = VECTOR('',#75,1.);
+#75 = DIRECTION('',(1.,0.));
+#42 = SURFACE_CURVE('',#55,(#80),.PCURVE_S1.);
+#55 = CIRCLE('',#11,10.);
+#80 = PCURVE('',#10,#81);
+#81 = DEFINITIONAL_REPRESENTATION('',(#82),#99);
+#82 = LINE('',#66,#74);
+#99 = ( GEOMETRIC_REPRESENTATION_CONTEXT(2) PARAMETRIC_REPRESENTATION_CONTEXT() REPRESENTATION_CONTEXT('2D SPACE','') );
+#90 = ( NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.) );
+#91 = PLANE_ANGLE_MEASURE_WITH_UNIT(PLANE_ANGLE_MEASURE(0.0174532925199433),#90);
+#92 = DIMENSIONAL_EXPONENTS(0.,0.,0.,0.,0.,0.,0.);
+#93 = ( CONVERSION_BASED_UNIT('DEGREE',#91) NAMED_UNIT(#92) PLANE_ANGLE_UNIT() );
+#94 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );
+#95 = ( GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNIT_ASSIGNED_CONTEXT((#94,#93)) REPRESENTATION_CONTEXT('','') );
+ENDSEC;
+END-ISO-10303-21;
+";
+
+#[test]
+fn pcurves_on_an_analytic_seam_are_read_in_the_files_angle_unit() {
+    let o = StepOptions::default();
+    let (model, t) = tess(DEGREE_CYLINDER, &o);
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (4, 0));
+    let l = &step::tessellate::boundary(&model, 1, &o).unwrap()[0];
+    assert!(l.pcurve.iter().all(|p| p.is_some()));
+    let seam: Vec<f64> =
+        l.points.iter().zip(&l.uv).filter(|(p, _)| p.y.abs() < 1e-9 && p.x > 0.0).map(|(_, w)| w.x).collect();
+    let tau = std::f64::consts::TAU;
+    assert!(seam.iter().all(|u| u.abs() < 1e-9 || (u - tau).abs() < 1e-9), "{seam:?}");
+    assert!(seam.iter().any(|u| u.abs() < 1e-9) && seam.iter().any(|u| (u - tau).abs() < 1e-9), "{seam:?}");
+    let area = t.faces[0].area_mm2;
+    let exact = tau * 10.0 * 5.0;
+    assert!((area - exact).abs() < 1e-3 * exact && area < exact, "area {area} vs {exact}");
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.y).length() - 10.0).abs()) < 0.0101);
+}
