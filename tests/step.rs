@@ -402,3 +402,177 @@ fn a_cone_closed_by_a_vertex_loop_at_its_apex_tessellates() {
         step::load(fx::cone_nose().as_bytes(), &StepOptions::default(), &MeshOptions::default(), &|| 0.0).unwrap();
     assert_eq!(out.mesh.surface.loops.len(), 1);
 }
+
+/// PCURVEs (issue 36: "PCURVEs where present, projection where not"): the edges of a B-spline
+/// face take their parameters from their pcurves (a 2D line and a non-uniform B-spline at the 3D
+/// curve's parameters, a reversed, non-uniformly parameterised one by locating each sample on
+/// it), and a pcurve that lies off its edge is refused: that edge is projected.
+#[test]
+fn pcurves_give_the_boundary_parameters_and_a_lying_one_falls_back_to_projection() {
+    let text = fx::field_pcurves();
+    let o = StepOptions::default();
+    let (model, t) = tess(&text, &o);
+    let face = &model.faces[0];
+    let s = &face.surface;
+    let loops = step::tessellate::boundary(&model, face.id, &o).unwrap();
+    assert_eq!(loops.len(), 1);
+    let l = &loops[0];
+    assert_eq!((l.pcurve_edges, l.pcurves_off_surface), (3, 1));
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (3, 1));
+    // The loop's edges and their pcurves, in loop order (y = 0, x = 60, y = 40, x = 0).
+    let pcurve_of = |k: usize| model.edges[&face.bounds[0].edges[k].0].pcurves[0].id;
+    let (mut lines, mut greville, mut reversed, mut projected) = (0, 0, 0, 0);
+    for ((p, w), src) in l.points.iter().zip(&l.uv).zip(&l.pcurve) {
+        // Every sample's parameters map onto it (the guard: a tenth of the chordal tolerance).
+        assert!((s.point(*w) - *p).length() <= 0.1 * o.chordal_tol_mm, "{p} at {w}");
+        let (u, v) = (p.x / fx::FIELD_MM[0], p.y / fx::FIELD_MM[1]);
+        match *src {
+            // The 2D line v = 0, u = t: exactly the pcurve's values.
+            Some(id) if id == pcurve_of(0) => {
+                assert_eq!(w.y, 0.0);
+                assert!((w.x - u).abs() < 1e-12, "{w} vs {u}");
+                lines += 1;
+            }
+            // The B-spline on knots (0, 0.3, 1): u = 1 exactly, v = t.
+            Some(id) if id == pcurve_of(1) => {
+                assert_eq!(w.x, 1.0);
+                assert!((w.y - v).abs() < 1e-12, "{w} vs {v}");
+                greville += 1;
+            }
+            // The reversed one (v = 1 − s²): located, u = 0 exactly.
+            Some(id) if id == pcurve_of(3) => {
+                assert_eq!(w.x, 0.0);
+                assert!((w.y - v).abs() < 1e-9, "{w} vs {v}");
+                reversed += 1;
+            }
+            Some(id) => panic!("pcurve #{id} used: it lies 4 mm off its edge"),
+            // The lying pcurve's edge (y = 40), projected: v = 1, not its 0.9.
+            None => {
+                assert!((w.y - 1.0).abs() < 1e-9 && (w.x - u).abs() < 1e-9, "{w}");
+                projected += 1;
+            }
+        }
+    }
+    assert!(lines > 2 && greville > 2 && reversed > 2 && projected > 2, "{lines} {greville} {reversed} {projected}");
+    // The face tessellates as the same surface without pcurves does, within the tolerance.
+    let (_, plain) = tess(&fx::bspline_patch(), &o);
+    assert!(t.chordal_error_mm <= o.chordal_tol_mm);
+    assert!(t.positions.iter().all(|p| (p.z - fx::height(p.x, p.y)).abs() < 1e-9));
+    let area: f64 = t.faces[0].area_mm2;
+    assert!((area - plain.faces[0].area_mm2).abs() < 1e-6 * area, "{area} vs {}", plain.faces[0].area_mm2);
+    assert_eq!((plain.faces[0].pcurve_edges, plain.faces[0].pcurves_off_surface), (0, 0));
+}
+
+/// A closed B-spline tube with a seam edge used twice: its SEAM_CURVE's two pcurves give the
+/// seam's two sides (u = 0 and u = 1), which projection cannot tell apart.
+#[test]
+fn a_seam_edge_of_a_closed_bspline_takes_each_side_from_its_own_pcurve() {
+    let o = StepOptions::default();
+    let (model, t) = tess(&fx::bspline_tube(true), &o);
+    let (r, h) = fx::TUBE_MM;
+    assert_eq!(t.faces[0].surface, "rational b-spline");
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (4, 0));
+    let area = t.faces[0].area_mm2;
+    let exact = std::f64::consts::TAU * r * h;
+    assert!((area - exact).abs() < 1e-3 * exact && area < exact, "area {area} vs {exact}");
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.y).length() - r).abs()) <= 1.1 * o.chordal_tol_mm);
+    // The seam's samples: the first use on u = 1, the second on u = 0.
+    let face = &model.faces[0];
+    let l = &step::tessellate::boundary(&model, face.id, &o).unwrap()[0];
+    let on_seam: Vec<f64> =
+        l.points.iter().zip(&l.uv).filter(|(p, _)| p.y.abs() < 1e-9 && p.x > 0.0).map(|(_, w)| w.x).collect();
+    assert!(on_seam.contains(&1.0) && on_seam.contains(&0.0), "{on_seam:?}");
+    assert!(on_seam.iter().all(|&u| u == 0.0 || u == 1.0), "{on_seam:?}");
+    // Welded across the seam: one band, the boundary only the two circles.
+    let out = step::load(fx::bspline_tube(true).as_bytes(), &o, &MeshOptions::default(), &|| 0.0).unwrap();
+    assert_eq!(out.mesh.report.boundary_loops, 2);
+    // Without the pcurves both sides of the seam project to the same parameters.
+    let plain = step::read_and_tessellate(fx::bspline_tube(false).as_bytes(), &o, &|| 0.0);
+    assert!(matches!(plain, Err(StepError::Tessellation { .. })), "{:?}", plain.map(|x| x.1.triangles.len()));
+}
+
+/// A cylinder face as OpenCascade writes it (a seam edge used twice, SEAM_CURVE with its two
+/// pcurves, circles with theirs), in a file whose plane-angle unit is the degree: the pcurves'
+/// angles are read in degrees (u = 0 and u = 360 on the seam) and all four edge uses take them.
+const DEGREE_CYLINDER: &str = "ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION((''),'2;1');
+FILE_NAME('cylinder','',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));
+ENDSEC;
+DATA;
+#1 = ADVANCED_FACE('',(#2),#10,.T.);
+#2 = FACE_OUTER_BOUND('',#3,.T.);
+#3 = EDGE_LOOP('',(#4,#5,#6,#7));
+#4 = ORIENTED_EDGE('',*,*,#20,.T.);
+#5 = ORIENTED_EDGE('',*,*,#21,.F.);
+#6 = ORIENTED_EDGE('',*,*,#20,.F.);
+#7 = ORIENTED_EDGE('',*,*,#22,.T.);
+#10 = CYLINDRICAL_SURFACE('',#11,10.);
+#11 = AXIS2_PLACEMENT_3D('',#12,#13,#14);
+#12 = CARTESIAN_POINT('',(0.,0.,0.));
+#13 = DIRECTION('',(0.,0.,1.));
+#14 = DIRECTION('',(1.,0.,0.));
+#20 = EDGE_CURVE('',#30,#31,#40,.T.);
+#21 = EDGE_CURVE('',#31,#31,#41,.T.);
+#22 = EDGE_CURVE('',#30,#30,#42,.T.);
+#30 = VERTEX_POINT('',#32);
+#31 = VERTEX_POINT('',#33);
+#32 = CARTESIAN_POINT('',(10.,0.,0.));
+#33 = CARTESIAN_POINT('',(10.,0.,5.));
+#40 = SEAM_CURVE('',#50,(#60,#61),.PCURVE_S1.);
+#50 = LINE('',#32,#51);
+#51 = VECTOR('',#13,1.);
+#60 = PCURVE('',#10,#62);
+#61 = PCURVE('',#10,#63);
+#62 = DEFINITIONAL_REPRESENTATION('',(#64),#99);
+#63 = DEFINITIONAL_REPRESENTATION('',(#65),#99);
+#64 = LINE('',#66,#67);
+#65 = LINE('',#69,#67);
+#66 = CARTESIAN_POINT('',(0.,0.));
+#67 = VECTOR('',#68,1.);
+#68 = DIRECTION('',(0.,1.));
+#69 = CARTESIAN_POINT('',(360.,0.));
+#41 = SURFACE_CURVE('',#52,(#70),.PCURVE_S1.);
+#52 = CIRCLE('',#53,10.);
+#53 = AXIS2_PLACEMENT_3D('',#54,#13,#14);
+#54 = CARTESIAN_POINT('',(0.,0.,5.));
+#70 = PCURVE('',#10,#71);
+#71 = DEFINITIONAL_REPRESENTATION('',(#72),#99);
+#72 = LINE('',#73,#74);
+#73 = CARTESIAN_POINT('',(0.,5.));
+#74 = VECTOR('',#75,1.);
+#75 = DIRECTION('',(1.,0.));
+#42 = SURFACE_CURVE('',#55,(#80),.PCURVE_S1.);
+#55 = CIRCLE('',#11,10.);
+#80 = PCURVE('',#10,#81);
+#81 = DEFINITIONAL_REPRESENTATION('',(#82),#99);
+#82 = LINE('',#66,#74);
+#99 = ( GEOMETRIC_REPRESENTATION_CONTEXT(2) PARAMETRIC_REPRESENTATION_CONTEXT() REPRESENTATION_CONTEXT('2D SPACE','') );
+#90 = ( NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.) );
+#91 = PLANE_ANGLE_MEASURE_WITH_UNIT(PLANE_ANGLE_MEASURE(0.0174532925199433),#90);
+#92 = DIMENSIONAL_EXPONENTS(0.,0.,0.,0.,0.,0.,0.);
+#93 = ( CONVERSION_BASED_UNIT('DEGREE',#91) NAMED_UNIT(#92) PLANE_ANGLE_UNIT() );
+#94 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );
+#95 = ( GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNIT_ASSIGNED_CONTEXT((#94,#93)) REPRESENTATION_CONTEXT('','') );
+ENDSEC;
+END-ISO-10303-21;
+";
+
+#[test]
+fn pcurves_on_an_analytic_seam_are_read_in_the_files_angle_unit() {
+    let o = StepOptions::default();
+    let (model, t) = tess(DEGREE_CYLINDER, &o);
+    assert_eq!((t.faces[0].pcurve_edges, t.faces[0].pcurves_off_surface), (4, 0));
+    let l = &step::tessellate::boundary(&model, 1, &o).unwrap()[0];
+    assert!(l.pcurve.iter().all(|p| p.is_some()));
+    let seam: Vec<f64> =
+        l.points.iter().zip(&l.uv).filter(|(p, _)| p.y.abs() < 1e-9 && p.x > 0.0).map(|(_, w)| w.x).collect();
+    let tau = std::f64::consts::TAU;
+    assert!(seam.iter().all(|u| u.abs() < 1e-9 || (u - tau).abs() < 1e-9), "{seam:?}");
+    assert!(seam.iter().any(|u| u.abs() < 1e-9) && seam.iter().any(|u| (u - tau).abs() < 1e-9), "{seam:?}");
+    let area = t.faces[0].area_mm2;
+    let exact = tau * 10.0 * 5.0;
+    assert!((area - exact).abs() < 1e-3 * exact && area < exact, "area {area} vs {exact}");
+    assert!(dense_chordal(&t, &|p| (DVec2::new(p.x, p.y).length() - 10.0).abs()) < 0.0101);
+}

@@ -395,3 +395,37 @@ fn plan_flank_returns_the_plan_as_typed_arrays() {
     let unknown = js_sys::JSON::parse(r#"{"radius": 1}"#).unwrap();
     assert!(slitpath::wasm::plan_flank(&stl, JsValue::UNDEFINED, unknown, None, JsValue::UNDEFINED).is_err());
 }
+
+/// `planFlankOnStepFile` on faces of a `StepFile` (issue 36): the plan `planFlank` makes of the
+/// file's bytes with that selection, byte for byte, from the file read once (one handle serves
+/// several selections); an unknown face is an `Error` naming it.
+#[wasm_bindgen_test]
+fn plan_flank_on_a_step_file_is_plan_flank_of_its_bytes() {
+    let step = slitpath::fixtures::step::by_name("cylinder_band").unwrap();
+    let options = || {
+        js_sys::JSON::parse(
+            r#"{"tipRadiusMm": 1.5, "topRadiusMm": 2.5, "fluteLengthMm": 20, "direction": [1, 0, 0], "verifySamples": 2000}"#,
+        )
+        .unwrap()
+    };
+    let file = slitpath::wasm::StepFile::new(step.as_bytes(), JsValue::UNDEFINED, None).unwrap();
+    for faces in [[62.0, 78.0], [78.0, 94.0]] {
+        let from_file =
+            slitpath::wasm::plan_flank_on_step_file(&file, Some(faces.to_vec()), JsValue::UNDEFINED, options(), None)
+                .unwrap();
+        let step_options = js_sys::JSON::parse(&format!(r#"{{"faces": [{}, {}]}}"#, faces[0], faces[1])).unwrap();
+        let from_bytes =
+            slitpath::wasm::plan_flank(step.as_bytes(), JsValue::UNDEFINED, options(), None, step_options).unwrap();
+        assert!(from_file.gcode().len() > 1000);
+        assert_eq!(from_file.gcode(), from_bytes.gcode(), "faces {faces:?}");
+        assert_eq!(from_file.positions(), from_bytes.positions());
+    }
+    let err: js_sys::Error = JsValue::from(
+        slitpath::wasm::plan_flank_on_step_file(&file, Some(vec![999.0]), JsValue::UNDEFINED, options(), None)
+            .err()
+            .unwrap(),
+    )
+    .dyn_into()
+    .unwrap();
+    assert!(String::from(err.message()).contains("#999"), "{}", String::from(err.message()));
+}

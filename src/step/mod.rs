@@ -107,6 +107,11 @@ pub struct FaceInfo {
     pub triangles: usize,
     /// The largest facet-to-surface distance measured on it, mm.
     pub chordal_error_mm: f64,
+    /// Edge uses of its loops whose parameters came from a PCURVE (the others were projected).
+    pub pcurve_edges: usize,
+    /// Edge uses whose pcurves on its surface lay off the edge (farther than a tenth of the
+    /// chordal tolerance from its samples): projected instead.
+    pub pcurves_off_surface: usize,
     /// Faces sharing an edge with it (all faces of the file, selected or not).
     pub adjacent: Vec<u64>,
 }

@@ -7,7 +7,16 @@
 //! VERTEX_POINT; surfaces PLANE, CYLINDRICAL_, CONICAL_, SPHERICAL_, TOROIDAL_SURFACE and
 //! B_SPLINE_SURFACE_WITH_KNOTS (simple or complex, RATIONAL_B_SPLINE_SURFACE too); curves LINE,
 //! CIRCLE, ELLIPSE, B_SPLINE_CURVE_WITH_KNOTS (rational too), SURFACE_CURVE / SEAM_CURVE (their 3D
-//! curve). PCURVEs are not read: the tessellator inverts the 3D edge samples onto the surface.
+//! curve, and the PCURVEs among their associated geometry: a 2D LINE, CIRCLE, ELLIPSE or
+//! B_SPLINE_CURVE_WITH_KNOTS in a DEFINITIONAL_REPRESENTATION, on a surface of a kind read here).
+//! A PCURVE this reader cannot use (another curve type, a malformed instance) is left out, never
+//! an error: the tessellator then projects the edge's 3D samples onto the surface, as it does
+//! for edges without one.
+//! Pcurve units: its coordinates are the surface's parameters as the file writes them, so the
+//! length unit scales them on a plane (both), a cylinder or cone (`v`), and the plane-angle unit
+//! the angles (`u` of the elementary surfaces, `v` of a sphere or torus); a B-spline surface's
+//! parameters are its knots' and are not scaled. A pcurve's own parameter is read as the file
+//! writes it (a LINE's VECTOR magnitude kept, a CIRCLE's angle in the plane-angle unit).
 //! Units: the LENGTH_UNIT the representation context assigns (SI with prefix, or CONVERSION_BASED_UNIT such as INCH) and the
 //! PLANE_ANGLE_UNIT (radian or degree); without one, millimetres and radians.
 //! Assembly placements (MAPPED_ITEM, ITEM_DEFINED_TRANSFORMATION) are not applied: every face is
@@ -17,8 +26,9 @@ use super::geom::{Curve, Frame, Surface};
 use super::nurbs;
 use super::parse::{Entity, Param, Record, Table};
 use super::StepError;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::collections::BTreeMap;
+use std::f64::consts::TAU;
 
 /// A face bound: its edges in loop order, each with `true` when used in the edge's direction.
 #[derive(Clone, Debug)]
@@ -48,6 +58,44 @@ pub struct Edge {
     pub curve: Curve,
     /// The edge runs along the curve's direction.
     pub same_sense: bool,
+    /// `curve`'s parameter per parameter of the curve as the file writes it (a LINE's is
+    /// normalised to millimetres, a CIRCLE's angle to radians; 1 for B-splines): the file's
+    /// parameter of `curve.point(t)` is `t / param_scale`, the one its pcurves share.
+    pub param_scale: f64,
+    /// The PCURVEs of a SURFACE_CURVE or SEAM_CURVE (a seam has two on one surface).
+    pub pcurves: Vec<Pcurve>,
+}
+
+/// An edge's curve in the parameters of one surface (PCURVE).
+#[derive(Clone, Debug)]
+pub struct Pcurve {
+    /// The PCURVE's id.
+    pub id: u64,
+    /// The id of its basis surface (compared with a face's `surface_id`).
+    pub surface_id: u64,
+    /// The 2D curve, z = 0, in the file's units (unscaled).
+    pub curve: Curve,
+    /// `curve`'s parameter per file parameter (a CIRCLE's: radians per plane-angle unit).
+    pub param_scale: f64,
+    /// The surface's parameters per file coordinate of the curve (see the module docs).
+    pub scale: DVec2,
+    /// The file-parameter range of a bounded curve (a B-spline's knots, a full turn of a
+    /// circle or ellipse); `None` for a line.
+    pub range: Option<(f64, f64)>,
+}
+
+impl Pcurve {
+    /// The surface parameters at the file parameter `t`.
+    pub fn uv(&self, t: f64) -> DVec2 {
+        let q = self.curve.point(t * self.param_scale);
+        DVec2::new(q.x, q.y) * self.scale
+    }
+
+    /// The derivative of [`Pcurve::uv`] with respect to `t`.
+    pub fn duv(&self, t: f64) -> DVec2 {
+        let d = self.curve.derivative(t * self.param_scale) * self.param_scale;
+        DVec2::new(d.x, d.y) * self.scale
+    }
 }
 
 /// The B-rep of a STEP file.
@@ -61,6 +109,9 @@ pub struct Model {
     /// The unit as written (`millimetre`, `INCH`, …; `assumed millimetre` when none is given).
     pub unit_name: String,
 }
+
+/// A pcurve's 2D curve, its parameter scale and its file-parameter range (see [`Pcurve`]).
+type Curve2d = (Curve, f64, Option<(f64, f64)>);
 
 struct Reader<'a> {
     table: &'a Table,
@@ -161,8 +212,150 @@ impl Reader<'_> {
                 slot.insert(self.point(Params::new(v, vr, 2)?.reference(1)?)?);
             }
         }
-        let curve = self.curve(p.reference(3)?)?;
-        Ok(Edge { id, start, end, curve, same_sense: p.boolean(4)? })
+        let curve_id = p.reference(3)?;
+        let curve = self.curve(curve_id)?;
+        let param_scale = self.param_scale(curve_id, &curve);
+        let pcurves = self.pcurves(curve_id);
+        Ok(Edge { id, start, end, curve, same_sense: p.boolean(4)?, param_scale, pcurves })
+    }
+
+    /// See [`Edge::param_scale`]: the curve `id` (read as `curve`) has parameter `t` where the
+    /// file's has `t / param_scale`.
+    fn param_scale(&self, id: u64, curve: &Curve) -> f64 {
+        match curve {
+            Curve::BSpline(_) => 1.0,
+            Curve::Circle(..) | Curve::Ellipse(..) => self.rad,
+            Curve::Line { .. } => {
+                // Follow SURFACE_CURVEs down to the LINE; its VECTOR's magnitude, in file units.
+                let mut at = id;
+                for _ in 0..4 {
+                    let Some(e) = self.table.get(&at) else { break };
+                    let rec = &e.records[0];
+                    match rec.name.as_str() {
+                        "SURFACE_CURVE" | "SEAM_CURVE" => match rec.params.get(1) {
+                            Some(Param::Ref(r)) => at = *r,
+                            _ => break,
+                        },
+                        "LINE" => {
+                            let magnitude = match rec.params.get(2) {
+                                Some(Param::Ref(v)) => self
+                                    .table
+                                    .get(v)
+                                    .and_then(|v| v.record("VECTOR"))
+                                    .and_then(|v| v.params.get(2))
+                                    .and_then(as_real),
+                                _ => None,
+                            };
+                            return magnitude.filter(|m| m.is_finite() && *m > 0.0).map_or(self.mm, |m| m * self.mm);
+                        }
+                        _ => break,
+                    }
+                }
+                self.mm
+            }
+        }
+    }
+
+    /// The usable PCURVEs of a SURFACE_CURVE or SEAM_CURVE `id` (none for another curve): those
+    /// whose 2D curve and basis surface this reader knows. Faults leave a pcurve out.
+    fn pcurves(&self, id: u64) -> Vec<Pcurve> {
+        let Some(e) = self.table.get(&id) else { return Vec::new() };
+        let Some(rec) = e.record("SURFACE_CURVE").or_else(|| e.record("SEAM_CURVE")) else { return Vec::new() };
+        let Some(Param::List(items)) = rec.params.get(2) else { return Vec::new() };
+        items
+            .iter()
+            .filter_map(|item| match item {
+                Param::Ref(r) => self.pcurve(*r),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn pcurve(&self, id: u64) -> Option<Pcurve> {
+        let rec = self.table.get(&id)?.record("PCURVE")?;
+        let p = Params::new(id, rec, 3).ok()?;
+        let surface_id = p.reference(1).ok()?;
+        let surface = self.table.get(&surface_id)?;
+        let (mm, rad) = (self.mm, self.rad);
+        let scale = if surface.record("B_SPLINE_SURFACE_WITH_KNOTS").is_some() {
+            DVec2::ONE
+        } else {
+            match surface.records[0].name.as_str() {
+                "PLANE" => DVec2::new(mm, mm),
+                "CYLINDRICAL_SURFACE" | "CONICAL_SURFACE" => DVec2::new(rad, mm),
+                "SPHERICAL_SURFACE" | "TOROIDAL_SURFACE" => DVec2::new(rad, rad),
+                _ => return None,
+            }
+        };
+        let rep = p.reference(2).ok()?;
+        let rrec = self.table.get(&rep)?.record("DEFINITIONAL_REPRESENTATION")?;
+        let items = Params::new(rep, rrec, 2).ok()?.refs(1).ok()?;
+        let &[curve_id] = items.as_slice() else { return None };
+        // The 2D curve in the file's own units: a reader that scales nothing.
+        let plain = Reader { table: self.table, mm: 1.0, rad: 1.0 };
+        let (curve, param_scale, range) = plain.curve_2d(curve_id, self.rad)?;
+        Some(Pcurve { id, surface_id, curve, param_scale, scale, range })
+    }
+
+    /// A 2D curve (z = 0) as written, its parameter scale and file-parameter range (see
+    /// [`Pcurve`]); `rad` is the file's radians per plane-angle unit.
+    fn curve_2d(&self, id: u64, rad: f64) -> Option<Curve2d> {
+        let e = self.table.get(&id)?;
+        let point2 = |id: u64| -> Option<DVec3> {
+            let rec = self.table.get(&id)?.record("CARTESIAN_POINT")?;
+            match Params::new(id, rec, 2).ok()?.reals(1).ok()?.as_slice() {
+                [x, y] => Some(DVec3::new(*x, *y, 0.0)),
+                _ => None,
+            }
+        };
+        let direction2 = |id: u64| -> Option<DVec3> {
+            let rec = self.table.get(&id)?.record("DIRECTION")?;
+            match Params::new(id, rec, 2).ok()?.reals(1).ok()?.as_slice() {
+                [x, y] => DVec3::new(*x, *y, 0.0).try_normalize(),
+                _ => None,
+            }
+        };
+        let placement2 = |id: u64| -> Option<Frame> {
+            let rec = self.table.get(&id)?.record("AXIS2_PLACEMENT_2D")?;
+            let p = Params::new(id, rec, 2).ok()?;
+            let origin = point2(p.reference(1).ok()?)?;
+            let x = if p.is_null(2) { DVec3::X } else { direction2(p.reference(2).ok()?)? };
+            Frame::new(origin, DVec3::Z, x)
+        };
+        if e.record("B_SPLINE_CURVE_WITH_KNOTS").is_some() {
+            let curve = self.curve(id).ok()?;
+            let Curve::BSpline(c) = &curve else { return None };
+            if c.poles.iter().any(|p| p.z != 0.0) {
+                return None;
+            }
+            let range = c.range();
+            return Some((curve, 1.0, Some(range)));
+        }
+        let rec = &e.records[0];
+        let p = Params::new(id, rec, 3).ok()?;
+        let turn = Some((0.0, TAU / rad));
+        match rec.name.as_str() {
+            "LINE" => {
+                let origin = point2(p.reference(1).ok()?)?;
+                let v = p.reference(2).ok()?;
+                let vp = Params::new(v, self.table.get(&v)?.record("VECTOR")?, 3).ok()?;
+                let magnitude = vp.real(2).ok().filter(|m| m.is_finite() && *m > 0.0)?;
+                Some((Curve::Line { origin, dir: direction2(vp.reference(1).ok()?)? * magnitude }, 1.0, None))
+            }
+            "CIRCLE" => {
+                let r = p.real(2).ok().filter(|r| r.is_finite() && *r > 0.0)?;
+                Some((Curve::Circle(placement2(p.reference(1).ok()?)?, r), rad, turn))
+            }
+            "ELLIPSE" => {
+                let p = p.at_least(4).ok()?;
+                let (a, b) = (p.real(2).ok()?, p.real(3).ok()?);
+                if !(a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0) {
+                    return None;
+                }
+                Some((Curve::Ellipse(placement2(p.reference(1).ok()?)?, a, b), rad, turn))
+            }
+            _ => None,
+        }
     }
 
     fn point(&self, id: u64) -> Result<DVec3, StepError> {

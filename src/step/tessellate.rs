@@ -5,8 +5,12 @@
 //!    vertices, split in halves while the chord strays more than half the chordal tolerance from the
 //!    curve's midpoint or is longer than the edge limit (a curved edge at least in four). The end
 //!    samples are the vertices themselves.
-//! 2. Each face's loops are chains of these samples; each sample is inverted onto the surface
-//!    (closed form for analytic surfaces, Newton for B-splines). Angle parameters are unwrapped
+//! 2. Each face's loops are chains of these samples. An edge with a PCURVE on the face's surface
+//!    takes its samples' parameters from it (at the 3D curve's parameters, or located on it),
+//!    unless some sample's pcurve point maps farther than [`PCURVE_GUARD`] × the tolerance from
+//!    it; a seam edge's two pcurves go to its two uses by continuity round the loop. Other
+//!    samples are inverted onto the surface (closed form for analytic surfaces, Newton for
+//!    B-splines). The 3D samples are never moved. Angle parameters are unwrapped
 //!    along the loop, so a seam edge used twice gives the two sides of the parameter rectangle;
 //!    two loops that wind once round a periodic surface in opposite senses (a band without a
 //!    seam edge, as Parasolid writes it) are joined by a synthetic seam, sampled once and used
@@ -14,7 +18,8 @@
 //! 3. [`triangulate`] meshes the domain to the tolerance; triangles are wound so their normal
 //!    is the face's (the surface normal, reversed when the face's `same_sense` is false).
 
-use super::model::{Face, Model};
+use super::geom::{Curve, Surface};
+use super::model::{Bound, Edge, Face, Model, Pcurve};
 use super::triangulate::{self, Domain, Failure};
 use super::{FaceInfo, StepError, StepOptions};
 use crate::num;
@@ -34,9 +39,13 @@ pub struct Tessellation {
     pub chordal_error_mm: f64,
 }
 
-/// Tessellates the faces of `model` whose ids are in `selected` (all when `None`).
-pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> Result<Tessellation, StepError> {
-    let faces: Vec<&Face> = match selected {
+/// How far (a fraction of the chordal tolerance) a pcurve's point, mapped through the surface,
+/// may lie from the edge's 3D sample for the pcurve to parameterise the edge.
+pub const PCURVE_GUARD: f64 = 0.1;
+
+/// The faces `selected` of `model` (all when `None`), each once, in the order asked.
+fn select<'m>(model: &'m Model, selected: Option<&[u64]>) -> Result<Vec<&'m Face>, StepError> {
+    Ok(match selected {
         None => model.faces.iter().collect(),
         Some(ids) => {
             let mut out = Vec::new();
@@ -51,34 +60,45 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
             }
             out
         }
-    };
-    let diagonal = {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        let mut add = |p: DVec3| {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        };
-        model.vertices.values().for_each(|p| add(*p));
-        // A closed edge (a full circle) has one vertex, a VERTEX_LOOP bounds by a point: without
-        // their points a dome's box is a point.
-        for f in &model.faces {
-            f.vertex_loops.iter().for_each(|p| add(*p));
-        }
-        for edge in model.edges.values().filter(|e| e.start == e.end) {
-            let a = model.vertices[&edge.start];
-            let (t0, t1) = edge.curve.span(a, a, true);
-            (0..8).for_each(|k| add(edge.curve.point(t0 + (t1 - t0) * k as f64 / 8.0)));
-        }
-        (hi - lo).length().max(1e-9)
-    };
-    let max_edge = o.max_edge_mm.unwrap_or(diagonal / 50.0);
-    let tol = o.chordal_tol_mm;
+    })
+}
 
-    // 1. Edge samples, shared.
+/// The diagonal of the model's box (vertices, points of closed edges and VERTEX_LOOPs), mm.
+fn diagonal(model: &Model) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut add = |p: DVec3| {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    };
+    model.vertices.values().for_each(|p| add(*p));
+    // A closed edge (a full circle) has one vertex, a VERTEX_LOOP bounds by a point: without
+    // their points a dome's box is a point.
+    for f in &model.faces {
+        f.vertex_loops.iter().for_each(|p| add(*p));
+    }
+    for edge in model.edges.values().filter(|e| e.start == e.end) {
+        let a = model.vertices[&edge.start];
+        let (t0, t1) = edge.curve.span(a, a, true);
+        (0..8).for_each(|k| add(edge.curve.point(t0 + (t1 - t0) * k as f64 / 8.0)));
+    }
+    (hi - lo).length().max(1e-9)
+}
+
+/// The edges' samples: positions (vertices first used first), and per edge its samples' ids and
+/// the file parameters of its curve at them, in the edge's direction.
+struct EdgeSamples {
+    positions: Vec<DVec3>,
+    ids: BTreeMap<u64, Vec<u32>>,
+    params: BTreeMap<u64, Vec<f64>>,
+}
+
+/// Samples every edge of `faces` once (see the module docs, step 1).
+fn sample_edges(model: &Model, faces: &[&Face], tol: f64, max_edge: f64) -> EdgeSamples {
     let mut positions: Vec<DVec3> = Vec::new();
     let mut vertex_index: BTreeMap<u64, u32> = BTreeMap::new();
     let mut edge_samples: BTreeMap<u64, Vec<u32>> = BTreeMap::new();
-    for f in &faces {
+    let mut edge_params: BTreeMap<u64, Vec<f64>> = BTreeMap::new();
+    for f in faces {
         for b in &f.bounds {
             for &(e, _) in &b.edges {
                 if edge_samples.contains_key(&e) {
@@ -103,19 +123,36 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
                 let mut inner = Vec::new();
                 // Half the tolerance: the facets along the edge then have room for the surface's own bulge.
                 subdivide(&|t| edge.curve.point(t), t0, from, t1, to, 0.5 * tol, max_edge, min_depth, 0, &mut inner);
+                let mut ts = vec![t0];
+                ts.extend(inner.iter().map(|s| s.0));
+                ts.push(t1);
                 if !edge.same_sense {
                     inner.reverse();
+                    ts.reverse();
                 }
                 let mut list = vec![ids[0]];
-                for p in inner {
+                for (_, p) in inner {
                     list.push(positions.len() as u32);
                     positions.push(p);
                 }
                 list.push(ids[1]);
                 edge_samples.insert(e, list);
+                edge_params.insert(e, ts.iter().map(|t| t / edge.param_scale).collect());
             }
         }
     }
+    EdgeSamples { positions, ids: edge_samples, params: edge_params }
+}
+
+/// Tessellates the faces of `model` whose ids are in `selected` (all when `None`).
+pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> Result<Tessellation, StepError> {
+    let faces = select(model, selected)?;
+    let max_edge = o.max_edge_mm.unwrap_or(diagonal(model) / 50.0);
+    let tol = o.chordal_tol_mm;
+
+    // 1. Edge samples, shared.
+    let EdgeSamples { mut positions, ids: edge_samples, params: edge_params } =
+        sample_edges(model, &faces, tol, max_edge);
 
     // 2–3. Faces.
     let mut triangles = Vec::new();
@@ -124,7 +161,9 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
     let mut chordal = 0.0f64;
     let budget = o.max_triangles;
     for f in &faces {
-        let (tris, local_to_global, dom, err) = mesh_face(f, &edge_samples, &mut positions, tol, max_edge, budget)?;
+        let samples = (&edge_samples, &edge_params);
+        let (tris, local_to_global, dom, err, [pcurve_edges, pcurves_off_surface]) =
+            mesh_face(f, &model.edges, samples, &mut positions, tol, max_edge, budget)?;
         chordal = chordal.max(err);
         let mut global: Vec<u32> = local_to_global;
         for p in &dom.p[global.len()..] {
@@ -151,6 +190,8 @@ pub fn tessellate(model: &Model, selected: Option<&[u64]>, o: &StepOptions) -> R
             area_mm2: area,
             triangles: tris.len(),
             chordal_error_mm: err,
+            pcurve_edges,
+            pcurves_off_surface,
             adjacent: Vec::new(),
         });
     }
@@ -232,7 +273,8 @@ fn numbered(positions: &[DVec3], triangles: &[[u32; 3]]) -> (Vec<DVec3>, Vec<[u3
     (out, triangles)
 }
 
-/// Appends the inner samples of the curve between parameters `t0` and `t1` to `out`.
+/// Appends the inner samples of the curve between parameters `t0` and `t1` to `out`, with
+/// their parameters.
 #[allow(clippy::too_many_arguments)]
 fn subdivide(
     c: &dyn Fn(f64) -> DVec3,
@@ -244,7 +286,7 @@ fn subdivide(
     max_edge: f64,
     min_depth: usize,
     depth: usize,
-    out: &mut Vec<DVec3>,
+    out: &mut Vec<(f64, DVec3)>,
 ) {
     let tm = 0.5 * (t0 + t1);
     let pm = c(tm);
@@ -256,16 +298,248 @@ fn subdivide(
     };
     if depth < 24 && (depth < min_depth || off > tol || chord.length() > max_edge) {
         subdivide(c, t0, p0, tm, pm, tol, max_edge, min_depth, depth + 1, out);
-        out.push(pm);
+        out.push((tm, pm));
         subdivide(c, tm, pm, t1, p1, tol, max_edge, min_depth, depth + 1, out);
     }
 }
 
-type FaceMesh = (Vec<[u32; 3]>, Vec<u32>, Domain, f64);
+/// A face's triangles (local indices), its local-to-global vertex map for the boundary samples,
+/// its domain, its chordal error, and its edge uses parameterised by a pcurve and those whose
+/// pcurves lay off the edge (projected instead).
+type FaceMesh = (Vec<[u32; 3]>, Vec<u32>, Domain, f64, [usize; 2]);
 
+/// One face bound as the tessellator parameterises it: its samples round the loop (each once,
+/// from the first edge's start), their surface parameters (angles unwrapped along the loop) and
+/// the PCURVE each sample's parameters came from (`None`: projected onto the surface).
+#[derive(Clone, Debug)]
+pub struct BoundaryLoop {
+    /// The bound's EDGE_LOOP id.
+    pub id: u64,
+    pub points: Vec<DVec3>,
+    pub uv: Vec<DVec2>,
+    pub pcurve: Vec<Option<u64>>,
+    /// Edge uses parameterised by a pcurve.
+    pub pcurve_edges: usize,
+    /// Edge uses with pcurves on the face's surface, none of which lies on the edge's samples
+    /// within the guard: projected instead.
+    pub pcurves_off_surface: usize,
+}
+
+/// The boundary loops of face `face` as [`tessellate`] parameterises them (its edges sampled as
+/// there): for tests and reports of which edges took their parameters from pcurves.
+pub fn boundary(model: &Model, face: u64, o: &StepOptions) -> Result<Vec<BoundaryLoop>, StepError> {
+    let faces = select(model, Some(&[face]))?;
+    let max_edge = o.max_edge_mm.unwrap_or(diagonal(model) / 50.0);
+    let samples = sample_edges(model, &faces, o.chordal_tol_mm, max_edge);
+    let guard = PCURVE_GUARD * o.chordal_tol_mm;
+    faces[0]
+        .bounds
+        .iter()
+        .map(|b| {
+            let (l, _) =
+                loop_parameters(faces[0], b, &model.edges, (&samples.ids, &samples.params), &samples.positions, guard)?;
+            Ok(l)
+        })
+        .collect()
+}
+
+/// The surface parameters of an edge's samples `points` (at the edge curve's file parameters
+/// `ts`) from the pcurve `pc`: the pcurve at the same parameters when it shares the curve's
+/// parameterisation (as CAD systems write it), else each sample located on it (nearest through
+/// the surface, from the previous sample's parameter or a grid of a bounded pcurve). `None` when
+/// some sample's pcurve point maps farther than `guard` from it.
+fn pcurve_parameters(s: &Surface, pc: &Pcurve, ts: &[f64], points: &[DVec3], guard: f64) -> Option<Vec<DVec2>> {
+    let off = |w: DVec2, p: DVec3| (s.point(w) - p).length();
+    let same: Vec<DVec2> = ts.iter().map(|&t| pc.uv(t)).collect();
+    if same.iter().zip(points).all(|(w, p)| off(*w, *p) <= guard) {
+        return Some(same);
+    }
+    let clamp = |t: f64| match (&pc.curve, pc.range) {
+        (Curve::BSpline(_), Some((a, b))) => t.clamp(a, b),
+        _ => t,
+    };
+    // Gauss–Newton on |S(pc(t)) − p|².
+    let locate = |p: DVec3, start: f64| -> (f64, f64) {
+        let mut t = clamp(start);
+        for _ in 0..30 {
+            let w = pc.uv(t);
+            let (x, su, sv) = s.eval(w);
+            let d = pc.duv(t);
+            let j = su * d.x + sv * d.y;
+            let den = j.length_squared();
+            if den.is_nan() || den <= 1e-300 {
+                break;
+            }
+            let step = (x - p).dot(j) / den;
+            t = clamp(t - step);
+            if step.abs() <= 1e-14 * (1.0 + t.abs()) {
+                break;
+            }
+        }
+        (t, off(pc.uv(t), p))
+    };
+    let mut out = Vec::with_capacity(points.len());
+    let mut prev: Option<f64> = None;
+    for (&t, &p) in ts.iter().zip(points) {
+        let mut best = locate(p, t);
+        if let Some(q) = prev {
+            let from_prev = locate(p, q);
+            if from_prev.1 < best.1 {
+                best = from_prev;
+            }
+        }
+        if let (true, Some((a, b))) = (best.1 > guard, pc.range) {
+            let n = 32;
+            let start = (0..=n)
+                .map(|k| a + (b - a) * k as f64 / n as f64)
+                .min_by(|&x, &y| off(pc.uv(x), p).total_cmp(&off(pc.uv(y), p)))
+                .unwrap_or(a);
+            let from_grid = locate(p, start);
+            if from_grid.1 < best.1 {
+                best = from_grid;
+            }
+        }
+        if best.1.is_nan() || best.1 > guard {
+            return None;
+        }
+        prev = Some(best.0);
+        out.push(pc.uv(best.0));
+    }
+    Some(out)
+}
+
+/// One edge use of a loop: the edge, its samples in the loop's direction, and the pcurves that
+/// fit them (id, parameters of each sample).
+type EdgeUse = (u64, Vec<u32>, Vec<(u64, Vec<DVec2>)>);
+
+/// The edge samples of a face: ids and file parameters per edge (see [`EdgeSamples`]).
+type Samples<'a> = (&'a BTreeMap<u64, Vec<u32>>, &'a BTreeMap<u64, Vec<f64>>);
+
+/// The bound `b` of `f` parameterised (see [`BoundaryLoop`]), and its samples' global ids.
+///
+/// Each edge use takes its parameters from a pcurve of the edge on the face's surface when one
+/// lies on the edge's samples (see [`pcurve_parameters`]); a seam edge has two, one per side,
+/// and each of its uses takes the one that continues the neighbouring uses' parameters. Other
+/// uses are projected onto the surface (closed form, or Newton from the previous sample).
+fn loop_parameters(
+    f: &Face,
+    b: &Bound,
+    edges: &BTreeMap<u64, Edge>,
+    (edge_samples, edge_params): Samples,
+    positions: &[DVec3],
+    guard: f64,
+) -> Result<(BoundaryLoop, Vec<u32>), StepError> {
+    let s = &f.surface;
+    let periodic = s.periodic();
+    // Each use: its samples in the loop's direction and the pcurves that fit it.
+    let mut uses: Vec<EdgeUse> = Vec::new();
+    let mut off_surface = 0;
+    for &(e, forward) in &b.edges {
+        let mut list = edge_samples[&e].clone();
+        let mut fits = Vec::new();
+        let on_face: Vec<&Pcurve> = edges[&e].pcurves.iter().filter(|p| p.surface_id == f.surface_id).collect();
+        if !on_face.is_empty() {
+            let points: Vec<DVec3> = list.iter().map(|&g| positions[g as usize]).collect();
+            for pc in on_face {
+                if let Some(w) = pcurve_parameters(s, pc, &edge_params[&e], &points, guard) {
+                    fits.push((pc.id, w));
+                }
+            }
+            if fits.is_empty() {
+                off_surface += 1;
+            }
+        }
+        if !forward {
+            list.reverse();
+            fits.iter_mut().for_each(|f| f.1.reverse());
+        }
+        uses.push((e, list, fits));
+    }
+    // One pcurve per use: a seam's two by continuity with the neighbours' ends (unknown ends
+    // count nothing; on a tie, the one the edge's other use did not take).
+    let n = uses.len();
+    let mut chosen: Vec<Option<usize>> = uses.iter().map(|u| (u.2.len() == 1).then_some(0)).collect();
+    for k in 0..n {
+        if uses[k].2.len() < 2 {
+            continue;
+        }
+        let (kp, kn) = ((k + n - 1) % n, (k + 1) % n);
+        let prev_end = chosen[kp].and_then(|c| uses[kp].2[c].1.last().copied());
+        let next_start = chosen[kn].and_then(|c| uses[kn].2[c].1.first().copied());
+        let taken: Vec<u64> = (0..n)
+            .filter(|&j| j != k && uses[j].0 == uses[k].0)
+            .filter_map(|j| chosen[j].map(|c| uses[j].2[c].0))
+            .collect();
+        let score = |(id, w): &(u64, Vec<DVec2>)| {
+            let gap = prev_end.map_or(0.0, |p| (w[0] - p).length())
+                + next_start.map_or(0.0, |q| (w[w.len() - 1] - q).length());
+            (gap, taken.contains(id))
+        };
+        chosen[k] = (0..uses[k].2.len()).min_by(|&x, &y| {
+            let (a, b) = (score(&uses[k].2[x]), score(&uses[k].2[y]));
+            a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+        });
+    }
+    // The chain of global sample ids round the loop, each once, with their pcurve parameters.
+    let mut chain: Vec<u32> = Vec::new();
+    let mut from: Vec<Option<(u64, DVec2)>> = Vec::new();
+    for (k, (e, list, fits)) in uses.iter().enumerate() {
+        if let Some(&last) = chain.last() {
+            if last != list[0] {
+                return Err(StepError::Entity {
+                    id: b.id,
+                    message: format!("edge #{e} does not start where the previous edge of the loop ends"),
+                });
+            }
+            chain.pop();
+            from.pop();
+        }
+        let fit = chosen[k].map(|c| &fits[c]);
+        for (i, &g) in list.iter().enumerate() {
+            chain.push(g);
+            from.push(fit.map(|(id, w)| (*id, w[i])));
+        }
+    }
+    if chain.len() > 1 && chain.first() == chain.last() {
+        chain.pop();
+        from.pop();
+    } else {
+        return Err(StepError::Entity { id: b.id, message: "the loop is not closed".into() });
+    }
+    // Parameters, unwrapped along the loop.
+    let mut uv = Vec::with_capacity(chain.len());
+    let mut prev: Option<DVec2> = None;
+    for (&g, src) in chain.iter().zip(&from) {
+        let mut w = match src {
+            Some((_, w)) => *w,
+            None => s.invert(positions[g as usize], prev),
+        };
+        if let Some(p) = prev {
+            for d in 0..2 {
+                if periodic[d] {
+                    w[d] = p[d] + num::wrap_pi(w[d] - p[d]);
+                }
+            }
+        }
+        prev = Some(w);
+        uv.push(w);
+    }
+    let l = BoundaryLoop {
+        id: b.id,
+        points: chain.iter().map(|&g| positions[g as usize]).collect(),
+        uv,
+        pcurve: from.iter().map(|x| x.map(|x| x.0)).collect(),
+        pcurve_edges: chosen.iter().filter(|c| c.is_some()).count(),
+        pcurves_off_surface: off_surface,
+    };
+    Ok((l, chain))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn mesh_face(
     f: &Face,
-    edge_samples: &BTreeMap<u64, Vec<u32>>,
+    edges: &BTreeMap<u64, Edge>,
+    samples: Samples,
     positions: &mut Vec<DVec3>,
     tol: f64,
     max_edge: f64,
@@ -277,46 +551,14 @@ fn mesh_face(
     let mut uv: Vec<DVec2> = Vec::new();
     let mut loops: Vec<(bool, Vec<u32>)> = Vec::new();
     let mut winding: Vec<(u64, [i64; 2])> = Vec::new();
+    let mut counts = [0usize; 2];
     for b in &f.bounds {
-        // The chain of global sample ids round the loop, each once.
-        let mut chain: Vec<u32> = Vec::new();
-        for &(e, forward) in &b.edges {
-            let mut list = edge_samples[&e].clone();
-            if !forward {
-                list.reverse();
-            }
-            if let Some(&last) = chain.last() {
-                if last != list[0] {
-                    return Err(StepError::Entity {
-                        id: b.id,
-                        message: format!("edge #{e} does not start where the previous edge of the loop ends"),
-                    });
-                }
-                chain.pop();
-            }
-            chain.extend(list);
-        }
-        if chain.len() > 1 && chain.first() == chain.last() {
-            chain.pop();
-        } else {
-            return Err(StepError::Entity { id: b.id, message: "the loop is not closed".into() });
-        }
-        // Parameters, unwrapped along the loop.
+        let (l, chain) = loop_parameters(f, b, edges, samples, positions, PCURVE_GUARD * tol)?;
+        counts[0] += l.pcurve_edges;
+        counts[1] += l.pcurves_off_surface;
         let start = uv.len();
-        let mut prev: Option<DVec2> = None;
-        for &g in &chain {
-            let mut w = s.invert(positions[g as usize], prev);
-            if let Some(p) = prev {
-                for d in 0..2 {
-                    if periodic[d] {
-                        w[d] = p[d] + num::wrap_pi(w[d] - p[d]);
-                    }
-                }
-            }
-            prev = Some(w);
-            uv.push(w);
-            global.push(g);
-        }
+        uv.extend(&l.uv);
+        global.extend(chain);
         // Turns round each periodic direction from the first sample back to itself.
         let (first, last) = (uv[start], uv[uv.len() - 1]);
         let mut turns = [0i64; 2];
@@ -477,7 +719,7 @@ fn mesh_face(
             tris.push(if n.dot(along) >= 0.0 { [at, a, b] } else { [at, b, a] });
         }
     }
-    Ok((tris, global, dom, err))
+    Ok((tris, global, dom, err, counts))
 }
 
 /// The circle round the pole `pole` of `s` (in direction 1 − `d`, the loop `cap` winding round

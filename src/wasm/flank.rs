@@ -1,7 +1,11 @@
 //! The flank strategy's entry in the facade (seed 002, issue 35): `planFlank(stl, meshOptions?,
 //! options?, onProgress?)` returns a `FlankPlan` whose getters hand out the report (the CLI's
-//! `--report` object) and flat typed arrays. Type conversion only.
+//! `--report` object) and flat typed arrays; `planFlankOnStepFile(file, faces?, meshOptions?,
+//! options?, onProgress?)` plans on faces of a `StepFile` already read (issue 36), without
+//! reading or tessellating it again. Both take one path from the surface on. Type conversion
+//! only.
 
+use super::step::StepFile;
 use super::{init, js_err, reject_unknown_fields, to_js, JsMeshOptions, JsStepOptions};
 use crate::flank::{self, ConeTool, FlankOptions, Weights};
 use crate::gcode::Post;
@@ -156,12 +160,40 @@ pub fn plan_flank(
     } else {
         crate::mesh::load(part, &mesh_options).map_err(js_err)?.surface
     };
+    plan_on(surface, &options, on_progress)
+}
+
+/// `planFlank` on the faces `faces` of a STEP file already read (`undefined`: the faces it was
+/// tessellated with, or for a solid its top faces), the part `Planner.fromStepFile` makes of
+/// them: the same plan as `planFlank` of the file's bytes with that selection, without reading
+/// or tessellating the file again.
+#[wasm_bindgen(js_name = planFlankOnStepFile)]
+pub fn plan_flank_on_step_file(
+    file: &StepFile,
+    faces: Option<Vec<f64>>,
+    mesh_options: JsValue,
+    options: JsValue,
+    on_progress: Option<js_sys::Function>,
+) -> Result<FlankPlan, JsError> {
+    init();
+    let mesh_options = JsMeshOptions::parse(mesh_options)?;
+    let options = JsFlankOptions::parse(options)?;
+    let surface = file.load(faces, &mesh_options).map_err(js_err)?.mesh.surface;
+    plan_on(surface, &options, on_progress)
+}
+
+/// The flank plan of `surface`, shared by both entries.
+fn plan_on(
+    surface: crate::mesh::Surface,
+    options: &FlankOptions,
+    on_progress: Option<js_sys::Function>,
+) -> Result<FlankPlan, JsError> {
     let mut progress = |stage: &str, done: usize, total: usize| {
         if let Some(f) = &on_progress {
             let _ = f.call3(&JsValue::NULL, &stage.into(), &(done as f64).into(), &(total as f64).into());
         }
     };
-    let plan = flank::plan(&surface, &options, &mut progress, &js_sys::Date::now).map_err(js_err)?;
+    let plan = flank::plan(&surface, options, &mut progress, &js_sys::Date::now).map_err(js_err)?;
     Ok(FlankPlan { plan, surface })
 }
 

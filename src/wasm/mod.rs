@@ -13,7 +13,7 @@ mod flank;
 mod step;
 
 pub use coons::{plan_coons, CoonsPlan};
-pub use flank::{plan_flank, FlankPlan};
+pub use flank::{plan_flank, plan_flank_on_step_file, FlankPlan};
 pub use step::{step_faces, StepFile};
 
 use std::sync::Once;

@@ -1,6 +1,7 @@
 //! STEP input for the page: a file read and tessellated once ([`StepFile`]), its faces listed
-//! from it, and parts made of any selection of them ([`Planner::from_step_file`]) without reading
-//! or tessellating it again (a real file of 25 faces takes seconds to tessellate at 0.01 mm).
+//! from it, and parts made of any selection of them ([`Planner::from_step_file`], and the flank
+//! strategy's `planFlankOnStepFile`) without reading or tessellating it again (a real file of
+//! 25 faces takes seconds to tessellate at 0.01 mm).
 
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
@@ -9,7 +10,7 @@ use super::{init, js_err, now, progress, to_js, JsMeshOptions, JsStepOptions, Pl
 use crate::step::{Model, StepOptions, Tessellation};
 
 /// The faces of a STEP file, tessellated: `{faces: [{id, surface, surface_id, loops, area_mm2,
-/// triangles, chordal_error_mm, adjacent}], positions, triangles, face_of_triangle,
+/// triangles, chordal_error_mm, pcurve_edges, pcurves_off_surface, adjacent}], positions, triangles, face_of_triangle,
 /// chordal_error_mm, read_ms, tessellate_ms}` (snake_case keys as serde writes them), for the page
 /// to show and pick faces. `stepOptions` as in `Planner.fromStep`; `onProgress(step, done,
 /// total)` is called before reading and before tessellating. `new StepFile(…).faces()` gives the
@@ -76,6 +77,23 @@ impl StepFile {
     }
 }
 
+impl StepFile {
+    /// The part made of faces `faces` (`None`: the faces it was tessellated with, or for a solid
+    /// its top faces): `step::load_from`, what `Planner.fromStepFile` and
+    /// `planFlankOnStepFile` plan on.
+    pub(super) fn load(
+        &self,
+        faces: Option<Vec<f64>>,
+        mesh_options: &crate::mesh::MeshOptions,
+    ) -> Result<crate::step::StepOutput, crate::step::StepError> {
+        let step_options = match faces {
+            Some(ids) => StepOptions { faces: Some(ids.iter().map(|&id| id as u64).collect()), ..self.options.clone() },
+            None => self.options.clone(),
+        };
+        crate::step::load_from(&self.model, &self.tessellation, &step_options, mesh_options, self.times)
+    }
+}
+
 #[wasm_bindgen]
 impl Planner {
     /// The part made of faces `faces` of a STEP file already read (`undefined`: the faces it was
@@ -86,12 +104,6 @@ impl Planner {
     pub fn from_step_file(file: &StepFile, options: JsValue, faces: Option<Vec<f64>>) -> Result<Planner, JsError> {
         init();
         let options = JsMeshOptions::parse(options)?;
-        let step_options = match faces {
-            Some(ids) => StepOptions { faces: Some(ids.iter().map(|&id| id as u64).collect()), ..file.options.clone() },
-            None => file.options.clone(),
-        };
-        let loaded = crate::step::load_from(&file.model, &file.tessellation, &step_options, &options, file.times)
-            .map_err(js_err)?;
-        Ok(Planner::from_step_output(loaded))
+        Ok(Planner::from_step_output(file.load(faces, &options).map_err(js_err)?))
     }
 }

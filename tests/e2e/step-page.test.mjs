@@ -5,7 +5,9 @@
 // `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on;
 // the ball-end spiral refuses the band's walls (undercuts for a 3-axis tool) and plans a block of
 // faces picked from a grid of B-spline faces, the same program as `slitpath plan --faces`; a
-// closed solid opened without a selection plans on its top face.
+// closed solid opened without a selection plans on its top face; the flank strategy on two
+// faces of a B-spline cylinder band (the file read once, when opened), the same program as
+// `slitpath flank --faces`.
 // The tests share one page and run in order.
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
@@ -148,5 +150,41 @@ describe("STEP input on the page", { concurrency: false }, () => {
     assert.deepEqual(await ticked(), [50], "only the B-spline top selected");
     const [max, h] = (await metric("metric-max-scallop")).match(/[\d.]+/g).map(Number);
     assert.ok(max > 0 && max <= h, `max scallop ≤ h: ${max} / ${h}`);
+  });
+
+  it("flank-mills a selection of STEP faces, the same program as `slitpath flank --faces`", async () => {
+    // Four quarter-cylinder B-spline faces (R 20 mm, 30 mm high); two of them, a half cylinder,
+    // are a wall the page's default cone flanks within the verifier's tolerance.
+    const file = join(output, "cylinder_band.step");
+    cli("fixture", "step:cylinder_band", "-o", file);
+    assert.match(await replan(() => page.getByTestId("opt-strategy").selectOption("flank")), /^(planned|error: )/);
+    assert.match(await replan(() => page.getByTestId("stl-input").setInputFiles(file)), /^(planned|error: )/, "the whole band opens (planned or refused)");
+    assert.equal((await ticked()).length, 4, "all four faces listed and selected");
+    const pick = [62, 78];
+    const state = await replan(() =>
+      page.evaluate((ids) => {
+        document.querySelector("[data-testid=faces-none]").click();
+        for (const id of ids) document.querySelector(`[data-testid=face-${id}]`).click();
+      }, pick),
+    );
+    assert.equal(state, "planned", await page.getByTestId("status-detail").textContent());
+    assert.deepEqual(await ticked(), pick);
+    assert.equal(await page.getByTestId("opt-strategy").inputValue(), "flank");
+    const gouge = Number((await metric("metric-flank-gouge")).match(/^([\d.e+-]+) mm/)?.[1]);
+    assert.ok(Number.isFinite(gouge) && gouge < 0.01, `max gouge under 0.01 mm: ${gouge}`);
+    for (const id of ["metric-flank-undercut", "metric-flank-strips", "metric-flank-coverage"]) {
+      assert.match(await metric(id), /\d/, `${id} shows a figure`);
+    }
+    const command = await page.getByTestId("cli-command").textContent();
+    assert.match(command, /^slitpath flank PART\.step --faces 62,78 /);
+    const [download] = await Promise.all([page.waitForEvent("download"), page.getByTestId("download-gcode").click()]);
+    assert.equal(download.suggestedFilename(), "cylinder_band.ngc");
+    const fromPageFile = join(output, "page-cylinder_band.ngc");
+    await download.saveAs(fromPageFile);
+    const cliFile = join(output, "cli-cylinder_band.ngc");
+    cli("flank", file, ...command.split(" ").slice(3), "-o", cliFile);
+    const [fromPage, fromCli] = [readFileSync(fromPageFile), readFileSync(cliFile)];
+    assert.ok(fromCli.length > 1000, "the CLI wrote a program");
+    assert.ok(fromPage.equals(fromCli), `page ${fromPage.length} bytes, CLI ${fromCli.length} bytes: they differ`);
   });
 });

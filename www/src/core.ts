@@ -2,7 +2,7 @@
 // Everything else imports the types and helpers it needs from here, never from ../pkg, so the
 // rest of the page does not depend on how the core is built. It runs inside the worker.
 
-import init, { Planner, StepFile as CoreStepFile, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, version } from "../pkg/slitpath.js";
+import init, { type FlankPlan as CoreFlankPlan, Planner, StepFile as CoreStepFile, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, planFlankOnStepFile as corePlanFlankOnStepFile, version } from "../pkg/slitpath.js";
 import type { FlankOptions, FlankOutput, FlankReport } from "./flank-types";
 import type { CoonsOptions, CoonsOutput, CoonsReport, StepFace, StepFacesOutput, StepOptions } from "./step-types";
 
@@ -367,11 +367,26 @@ export class Part {
  * Plans flank strips (5-axis, conical tool, seed 002) for the STL `stl`, or (STEP bytes) the
  * file's faces `stepOptions.faces` (default all); throws an Error whose message names the fault
  * (bad tool, rigidity not reached, …). The flank planner needs only the mesh, not the slit map:
- * it reads the file itself.
+ * it reads the file itself (a STEP file already open: `planFlankOnStepModel`).
  */
 export async function planFlank(stl: Uint8Array, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback, stepOptions?: StepOptions): Promise<FlankOutput> {
   await initCore();
-  const plan = corePlanFlank(stl, meshOptions, options, onProgress, stepOptions);
+  return flankOutput(corePlanFlank(stl, meshOptions, options, onProgress, stepOptions));
+}
+
+/**
+ * `planFlank` on the faces `faces` of a STEP file already read (default: those it was read
+ * with, or a solid's top faces), without reading or tessellating it again: the part
+ * `Part.fromStepModel` makes of them, and the same plan as `planFlank` of the file's bytes with
+ * that selection.
+ */
+export async function planFlankOnStepModel(model: StepModel, faces: number[] | undefined, meshOptions: MeshOptions | undefined, options: FlankOptions, onProgress?: ProgressCallback): Promise<FlankOutput> {
+  await initCore();
+  return flankOutput(corePlanFlankOnStepFile(model.file, faces === undefined ? undefined : Float64Array.from(faces), meshOptions, options, onProgress));
+}
+
+/** The plan's report and arrays; frees the core's plan. */
+function flankOutput(plan: CoreFlankPlan): FlankOutput {
   try {
     return {
       report: plan.report() as FlankReport,
@@ -399,11 +414,12 @@ export async function isStep(bytes: Uint8Array): Promise<boolean> {
 
 /**
  * A STEP file read and tessellated once (all its faces, or `stepOptions.faces`): its faces for a
- * page to list and pick, and parts of any selection of them (`Part.fromStepModel`). Holds wasm
+ * page to list and pick, and parts of any selection of them (`Part.fromStepModel`, and the flank
+ * strategy's `planFlankOnStepModel`). Holds wasm
  * memory until `free()`.
  */
 export class StepModel {
-  /** The core's handle (for `Part.fromStepModel`). */
+  /** The core's handle (for `Part.fromStepModel` and `planFlankOnStepModel`). */
   private constructor(readonly file: CoreStepFile) {}
 
   /** Reads and tessellates `step`; throws an Error naming the `#id` at fault. */

@@ -28,6 +28,10 @@ export interface StepFace {
   triangles: number;
   /** The largest facet-to-surface distance measured on it, mm. */
   chordal_error_mm: number;
+  /** Edge uses of its loops whose parameters came from a PCURVE (the others were projected). */
+  pcurve_edges: number;
+  /** Edge uses whose pcurves lay off the edge (beyond a tenth of the chordal tolerance): projected instead. */
+  pcurves_off_surface: number;
   /** Faces sharing an edge with it. */
   adjacent: number[];
 }

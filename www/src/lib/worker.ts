@@ -6,7 +6,7 @@
 // `self` is typed with the DOM lib (the page's tsconfig); postMessage(message, { transfer }) and
 // the "message" event have the same shape on a DedicatedWorkerGlobalScope.
 
-import { Part, StepModel, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, isStep, planCoons, planFlank, type MeshOptions, type PlanOutput, type StepFace, type StepOptions } from "../core";
+import { Part, StepModel, coreMemoryBytes, coreVersion, errorMessage, initCore, isFatal, isStep, planCoons, planFlank, planFlankOnStepModel, type MeshOptions, type PlanOutput, type StepFace, type StepOptions } from "../core";
 import { coonsDrawing } from "./coons-drawing";
 import { DEFAULT_PLAN_OPTIONS } from "./defaults";
 import { circles, extent, heatColours, loopEdges, pathPolyline, planar, type Polyline } from "./drawing";
@@ -21,11 +21,11 @@ let current:
   | {
       part: Part;
       name: string;
-      /** The STL (or STEP) and its mesh options: the flank planner reads the mesh itself. */
+      /** The STL (or STEP) and its mesh options: the flank planner makes its own mesh of an STL. */
       bytes: Uint8Array;
       meshOptions: MeshOptions | undefined;
-      /** A STEP file: the faces that make the part. */
-      stepOptions: StepOptions | undefined;
+      /** A STEP file: the file read once and the faces that make the part (the flank planner's too). */
+      source: StepSource | undefined;
       positions: Float32Array;
       triangles: Uint32Array;
       uv: Float64Array | null;
@@ -36,8 +36,8 @@ let current:
   | undefined;
 
 /**
- * The STEP file loaded last, read and tessellated once: its faces can be chosen again, and the
- * Coons band reads its bytes.
+ * The STEP file loaded last, read and tessellated once: its faces can be chosen again, the flank
+ * strategy plans on them, and the Coons band reads its bytes.
  */
 let stepFile: { model: StepModel; bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
 
@@ -158,7 +158,7 @@ async function loadPart(id: number, name: string, bytes: Uint8Array, meshOptions
     name: partName(name),
     bytes,
     meshOptions,
-    stepOptions: source?.stepOptions,
+    source,
     positions,
     triangles: triangles.slice(),
     uv,
@@ -268,15 +268,17 @@ function plan(request: Extract<WorkerRequest, { type: "plan" }>): void {
 async function flank(request: Extract<WorkerRequest, { type: "flank" }>): Promise<void> {
   if (current === undefined) throw new Error("no part is loaded");
   const started = performance.now();
-  const output = await planFlank(
-    current.bytes,
-    current.meshOptions,
-    { ...request.options, partName: current.name },
-    (stage, done, total) =>
-      // The views' arrays are the last step, after the core's.
-      post({ type: "progress", id: request.id, stage: stage === "done" ? "preparing the views" : stage, done, total: total + 1 }),
-    current.stepOptions,
-  );
+  const progress = (stage: string, done: number, total: number) =>
+    // The views' arrays are the last step, after the core's.
+    post({ type: "progress", id: request.id, stage: stage === "done" ? "preparing the views" : stage, done, total: total + 1 });
+  const options = { ...request.options, partName: current.name };
+  const { source } = current;
+  // A STEP part plans on the file read when it was opened (while it is still the one held: a
+  // file that failed to open replaced it but left the last good part shown).
+  const output =
+    source !== undefined && source.model === stepFile?.model
+      ? await planFlankOnStepModel(source.model, source.stepOptions.faces, current.meshOptions, options, progress)
+      : await planFlank(current.bytes, current.meshOptions, options, progress, source?.stepOptions);
   const result: FlankResult = { ...output, drawing: flankDrawing(output), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
   const { tips, axes, stripMoves, positions, triangles, vertexDeviation, drawing: d } = result;
   post(
