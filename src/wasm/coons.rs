@@ -1,7 +1,8 @@
-//! The Coons band strategy's entry in the facade (seed 004, issue 36): `planCoons(step, faces,
-//! options?)` returns a `CoonsPlan` whose getters hand out the report (the CLI's `--report`
+//! The Coons band strategy's entry in the facade (seed 004, issue 36): `planCoons(file, faces,
+//! options?)`, on a `StepFile` already read, returns a `CoonsPlan` whose getters hand out the report (the CLI's `--report`
 //! object), the program and flat typed arrays. Type conversion only.
 
+use super::step::StepFile;
 use super::{init, js_err, reject_unknown_fields, to_js};
 use crate::coons::{self, CoonsOptions};
 use crate::toolpath::Axes;
@@ -83,16 +84,16 @@ pub struct CoonsPlan {
     plan: coons::CoonsPlan,
 }
 
-/// Plans seed 004's spiral over the band of STEP faces `faces` (ids) of `step`. Throws an
-/// `Error` naming the fault; when the faces are not a band of four-sided faces the message says
-/// why (the page then offers the slit-map spiral, `Planner.fromStep`).
+/// Plans seed 004's spiral over the band of faces `faces` (ids) of a STEP file already read
+/// (`new StepFile(bytes, …)`: the file is not read again). Throws an `Error` naming the fault;
+/// when the faces are not a band of four-sided faces the message says why (the page then offers
+/// the slit-map spiral, `Planner.fromStepFile`).
 #[wasm_bindgen(js_name = planCoons)]
-pub fn plan_coons(step: &[u8], faces: Vec<f64>, options: JsValue) -> Result<CoonsPlan, JsError> {
+pub fn plan_coons(file: &StepFile, faces: Vec<f64>, options: JsValue) -> Result<CoonsPlan, JsError> {
     init();
     let options = JsCoonsOptions::parse(options)?;
-    let model = crate::step::read(step).map_err(js_err)?;
     let faces: Vec<u64> = faces.iter().map(|&f| f as u64).collect();
-    let plan = coons::plan(&model, &faces, &options, &js_sys::Date::now).map_err(js_err)?;
+    let plan = coons::plan(file.model(), &faces, &options, &js_sys::Date::now).map_err(js_err)?;
     Ok(CoonsPlan { plan })
 }
 

@@ -78,6 +78,11 @@ impl StepFile {
 }
 
 impl StepFile {
+    /// The file's B-rep, for the Coons band (`planCoons`).
+    pub(super) fn model(&self) -> &Model {
+        &self.model
+    }
+
     /// The part made of faces `faces` (`None`: the faces it was tessellated with, or for a solid
     /// its top faces): `step::load_from`, what `Planner.fromStepFile` and
     /// `planFlankOnStepFile` plan on.

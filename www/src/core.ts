@@ -419,7 +419,7 @@ export async function isStep(bytes: Uint8Array): Promise<boolean> {
  * memory until `free()`.
  */
 export class StepModel {
-  /** The core's handle (for `Part.fromStepModel` and `planFlankOnStepModel`). */
+  /** The core's handle (for `Part.fromStepModel`, `planFlankOnStepModel` and `planCoons`). */
   private constructor(readonly file: CoreStepFile) {}
 
   /** Reads and tessellates `step`; throws an Error naming the `#id` at fault. */
@@ -467,12 +467,13 @@ export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onP
 }
 
 /**
- * Plans seed 004's Coons spiral over the band of STEP faces `faces`; throws an Error whose message
- * says why when the faces are not a closed band of four-sided faces.
+ * Plans seed 004's Coons spiral over the band of faces `faces` of a STEP file already open (not
+ * read again); throws an Error whose message says why when the faces are not a closed band of
+ * four-sided faces.
  */
-export async function planCoons(step: Uint8Array, faces: number[], options: CoonsOptions): Promise<CoonsOutput> {
+export async function planCoons(model: StepModel, faces: number[], options: CoonsOptions): Promise<CoonsOutput> {
   await initCore();
-  const plan = corePlanCoons(step, Float64Array.from(faces), options);
+  const plan = corePlanCoons(model.file, Float64Array.from(faces), options);
   try {
     return {
       report: plan.report() as CoonsReport,

@@ -37,7 +37,7 @@ let current:
 
 /**
  * The STEP file loaded last, read and tessellated once: its faces can be chosen again, the flank
- * strategy plans on them, and the Coons band reads its bytes.
+ * strategy and the Coons band plan on them.
  */
 let stepFile: { model: StepModel; bytes: Uint8Array; name: string; meshOptions: MeshOptions | undefined; stepOptions: StepOptions; faces: StepFace[] } | undefined;
 
@@ -201,7 +201,7 @@ async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promis
   if (stepFile === undefined) throw new Error("the Coons band strategy needs a STEP file: open a .step or .stp part");
   const started = performance.now();
   post({ type: "progress", id: request.id, stage: "Coons band spiral", done: 0, total: 2 });
-  const output = await planCoons(stepFile.bytes, request.faces, { ...request.options, partName: partName(stepFile.name) });
+  const output = await planCoons(stepFile.model, request.faces, { ...request.options, partName: partName(stepFile.name) });
   post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
   // The report's radius is the one planned with (the core's default when none was given).
   const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, output.report.radius_mm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
