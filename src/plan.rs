@@ -454,8 +454,13 @@ impl Planner {
         let (designed, designed_normals) = (spiral.contacts(), spiral.normals());
         let (chord, dip) = (spiral_options.chord_tolerance_mm, self.dip_mm(options));
         let cc_faces: Vec<u32> = spiral.points.iter().map(|p| p.face).collect();
+        // As the spacing planned its balls (exact facets only).
+        let rest_above = match options.facets {
+            Facets::Exact => crate::spacing::rest_above_mm(options.scallop_mm),
+            Facets::Smooth => f64::INFINITY,
+        };
         let (contacts, normals, clearance) =
-            toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, dip, chord);
+            toolpath::clear_facets(&self.faces, &designed, &designed_normals, &cc_faces, r, dip, chord, rest_above);
         let toolpath = toolpath::toolpath(&contacts, &normals, &toolpath_options)?;
         // The designed contact curve: cleared contacts are touch points, which stall on a
         // vertex while the ball rolls over it, so their turning angles say nothing of the motion.

@@ -21,6 +21,13 @@ pub const CLEAR_ROUNDS: usize = 32;
 /// the rest is rounding.
 pub const CLEAR_REL: f64 = 1e-9;
 
+/// [`FaceTree::rest_ball`] slides a ball along its face at most this many radii (a crease whose
+/// flanks turn by 30° lets a ball tangent to one flank down R·tan 15° ≈ 0.27 R from it).
+pub const REST_SLIDE: f64 = 0.5;
+
+/// Slides of [`FaceTree::rest_ball`] before it moves the ball out instead.
+pub const REST_SLIDE_ROUNDS: usize = 8;
+
 /// A bounding-volume hierarchy over the faces of a mesh ([`crate::bvh`] over the face boxes and
 /// centroids); a leaf's slots hold the faces `order[start..start + count]`.
 #[derive(Clone, Debug)]
@@ -336,6 +343,53 @@ impl FaceTree {
             c = step(c, &hit);
         }
         ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false }
+    }
+
+    /// The ball of radius `radius` touching face `face` at its point `p` (centre p + radius·m,
+    /// m the face's unit normal), moved clear of every other facet the way that leaves least
+    /// over p: away from a facet that rises above `face`'s plane (the other flank of a concave
+    /// crease, a wall) it slides parallel to that plane, so it stays tangent to `face` and comes
+    /// to rest against both (the ball a crease lets down furthest); from any other facet, or once
+    /// it has slid [`REST_SLIDE`]·radius or taken [`REST_SLIDE_ROUNDS`] slides (a groove between
+    /// two rising facets), it is moved out along m as [`FaceTree::clear_ball`] moves it. `None`
+    /// for a degenerate face.
+    pub fn rest_ball(&self, p: DVec3, face: usize, radius: f64) -> Option<ClearBall> {
+        let slot = *self.slot_of.get(face)? as usize;
+        let (m, offset) = self.planes[slot];
+        if m == DVec3::ZERO {
+            return None;
+        }
+        let limit = radius * (1.0 - CLEAR_REL);
+        let start = p + radius * m;
+        let mut c = start;
+        let (mut rounds, mut last) = (0, None);
+        while let Some(hit) = if self.point_nearer_than(c, limit) { self.nearest(c, limit) } else { None } {
+            if rounds == CLEAR_ROUNDS {
+                return Some(ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: true });
+            }
+            rounds += 1;
+            last = Some(hit.slot);
+            let g = if hit.distance > 1e-12 * radius { (c - hit.point) / hit.distance } else { m };
+            // Along the face's plane, away from the facet point.
+            let along = g - g.dot(m) * m;
+            let slope = along.length();
+            let rises = m.dot(hit.point) - offset > 1e-9 * radius;
+            let slid = (c - start).length();
+            if rises && rounds <= REST_SLIDE_ROUNDS && slope > 1e-3 && slid < REST_SLIDE * radius {
+                // A Newton step on the distance to the facet's plane, exact for a plane.
+                c += along * ((radius - hit.distance) / (slope * slope));
+            } else if g.dot(m) > 0.25 {
+                c += m * ((radius - hit.distance) / g.dot(m));
+            } else {
+                c = hit.point + radius * g;
+            }
+        }
+        Some(ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false })
+    }
+
+    /// The unit normal of face `face`'s plane (zero for a degenerate face).
+    pub fn face_normal(&self, face: usize) -> DVec3 {
+        self.planes[self.slot_of[face] as usize].0
     }
 
     /// Whether slot `slot`'s bounding sphere is at least `limit` from the segment `ab` (then so

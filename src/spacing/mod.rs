@@ -334,7 +334,15 @@ const GATE_SAG: f64 = 0.02;
 /// still cleared (2.4 million clearances per plan: docs/benchmarks.md).
 const LIFT_FREE: f64 = 0.03;
 /// Lifts are planned for up to this fraction of h.
-const LIFT_CAP: f64 = 0.65;
+pub const LIFT_CAP: f64 = 0.65;
+
+/// With exact facets, a ball the clearance lifts by more than this over its contact (the most
+/// the spacing plans for, [`LIFT_CAP`]·h) is let down into the crease beside it instead when
+/// that leaves less ([`crate::mesh::nearest::FaceTree::rest_ball`]): the toolpath's
+/// ([`crate::toolpath::clear_facets`]) and the spacing's balls alike.
+pub fn rest_above_mm(h: f64) -> f64 {
+    LIFT_CAP * h
+}
 /// Where the facets alone leave more than this fraction of h (a ball touching there lifts by
 /// more), the verifier reports a facet valley: no ring reaches into it.
 pub const LIFT_VALLEY: f64 = 0.75;
@@ -977,28 +985,44 @@ impl<'a> Spacer<'a> {
         l.p + l.n * self.h
     }
 
-    /// The centre of the ball touching at `l`, moved out along the normal by its planned lift
-    /// off the facets ([`Spacer::lift_mm`]), as the toolpath will move it.
+    /// The centre of the ball touching at `l`, moved out by its planned lift off the facets
+    /// ([`Spacer::lift_mm`]), as the toolpath will move it.
     fn ball_centre(&self, l: &Lifted) -> DVec3 {
-        l.p + l.n * (self.ball + self.lift_mm(l))
+        let Some(h) = self.lift_h else { return l.p + l.n * self.ball };
+        let (dir, lift) = self.lift_mm(l, h);
+        l.p + dir * (self.ball + lift)
     }
 
     /// With exact facets, how much higher than on the surface's offset the ball whose contact is
-    /// `l` rides: placed along the interpolated normal n it dips into the facet whose normal is
-    /// tilted by α from n (and, at a concave edge, its neighbour), and the toolpath moves it out
-    /// along n until no facet is nearer than R ([`crate::toolpath::clear_facets`], R(1/cos α − 1)
-    /// off one facet's plane): the same clearance is run here. The first [`LIFT_FREE`]·h of it is
-    /// left to the target's margin and at most [`LIFT_CAP`]·h is planned for ([`planned_lift_mm`]).
-    /// The rings' centres are moved out by it, so that a band is tested against the balls that
-    /// will cut it. Lowering the points tested by the lift of a ball touching *there* instead
-    /// missed the cutting balls' own (gen001, 146 and 198 of issue 34's sweep kept 1.01–1.06 h),
-    /// and the contact facet's R(1/cos α − 1) alone, which jumps at every edge, left gen198
-    /// 1.10 h where the ball rests on an edge.
-    fn lift_mm(&self, l: &Lifted) -> f64 {
-        let Some(h) = self.lift_h else { return 0.0 };
+    /// `l` rides, and the direction from the contact to its centre: placed along the
+    /// interpolated normal n it dips into the facet whose normal is tilted by α from n (and, at a
+    /// concave edge, its neighbour), and the toolpath moves it out along n until no facet is
+    /// nearer than R ([`crate::toolpath::clear_facets`], R(1/cos α − 1) off one facet's plane):
+    /// the same clearance is run here. The first [`LIFT_FREE`]·h of it is left to the target's
+    /// margin and at most [`LIFT_CAP`]·h is planned for ([`planned_lift_mm`]). The rings'
+    /// centres are moved out by it, so that a band is tested against the balls that will cut it.
+    /// Lowering the points tested by the lift of a ball touching *there* instead missed the
+    /// cutting balls' own (gen001, 146 and 198 of issue 34's sweep kept 1.01–1.06 h), and the
+    /// contact facet's R(1/cos α − 1) alone, which jumps at every edge, left gen198 1.10 h where
+    /// the ball rests on an edge.
+    ///
+    /// A ball lifted more than [`LIFT_CAP`]·h is replaced, as the toolpath replaces it, by the
+    /// ball touching the contact's own facet there, let down into the crease beside it
+    /// ([`FaceTree::rest_ball`]) when that leaves less over the contact: its centre's direction
+    /// from the contact and its height over the offset, planned alike.
+    fn lift_mm(&self, l: &Lifted, h: f64) -> (DVec3, f64) {
+        let faces = self.gate.faces();
         let start = l.p + l.n * self.ball;
-        let ball = self.gate.faces().clear_ball(start, l.n, self.ball, Some(l.face as usize), true);
-        planned_lift_mm((ball.centre - start).dot(l.n), h)
+        let ball = faces.clear_ball(start, l.n, self.ball, Some(l.face as usize), true);
+        let over = |c: DVec3| c.distance(l.p) - self.ball;
+        if ball.rounds > 0 && over(ball.centre) > rest_above_mm(h) {
+            let rest = faces.rest_ball(l.p, l.face as usize, self.ball).filter(|b| !b.unresolved);
+            if let Some(rest) = rest.filter(|b| over(b.centre) < over(ball.centre)) {
+                let to = rest.centre - l.p;
+                return (to / to.length(), planned_lift_mm(over(rest.centre), h));
+            }
+        }
+        (l.n, planned_lift_mm((ball.centre - start).dot(l.n), h))
     }
 
     /// Ball centres of the ring `rho` around angle θ: five centres spanning about ±R along

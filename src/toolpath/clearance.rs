@@ -9,6 +9,14 @@
 //! `centre = cc + R·n` holds exactly and the contact is q (up to a Newton step's overshoot
 //! where the ball rests on an edge).
 //!
+//! Beside a concave crease that lift can exceed what the spacing plans for (`LIFT_CAP`·h): the
+//! interpolated normal tilts towards the crease's other flank, and a ball pushed along it leaves
+//! its lift over the contact. Such a ball is replaced by the ball touching the contact's own
+//! facet there, slid along that facet until it clears the other flank
+//! ([`FaceTree::rest_ball`]), when that leaves less over the contact: the ball a crease lets
+//! down furthest (issue 34: gen015, 112, 133 and 160 kept 1.02–1.26 h just outside their facet
+//! valleys under balls lifted 1.0–2.1 h). The spacing places its balls the same way.
+//!
 //! Between two cleared centres the machine moves straight, and a straight move can still cut:
 //! the chord of a convex offset, or a move past a feature narrower than the ball. Every move is
 //! checked whole against the facets ([`FaceTree::segment_nearer_than`]) and split at its
@@ -50,7 +58,10 @@ pub const MAX_SPLITS: usize = 12;
 /// smooth surface they tessellate), then splits each straight move between two centres that
 /// comes nearer than that less `chord_tolerance_mm` to a facet (a chord of a convex offset, or a
 /// move past a feature narrower than the ball) at its cleared midpoint. Returns the contacts
-/// and normals of the new path. Precondition: `0 ≤ dip_mm < R`.
+/// and normals of the new path. A centre lifted more than `rest_above_mm` over its contact is let
+/// down into the crease beside it when that leaves less (see the module docs; `f64::INFINITY`:
+/// never). Precondition: `0 ≤ dip_mm < R`.
+#[allow(clippy::too_many_arguments)]
 pub fn clear_facets(
     faces: &FaceTree,
     cc: &[DVec3],
@@ -59,6 +70,7 @@ pub fn clear_facets(
     radius_mm: f64,
     dip_mm: f64,
     chord_tolerance_mm: f64,
+    rest_above_mm: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Clearance) {
     debug_assert!((0.0..radius_mm).contains(&dip_mm), "dip {dip_mm} mm with R {radius_mm} mm");
     let face = |i: usize| cc_faces.get(i).map(|&f| f as usize);
@@ -97,7 +109,7 @@ pub fn clear_facets(
             }
             let mid = 0.5 * (centre(a) + centre(b));
             let dir = (a.1 + b.1).normalize_or(a.1);
-            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, ball, &mut report);
+            let m = clear_one(faces, mid - radius_mm * dir, dir, None, true, ball, rest_above_mm, &mut report);
             report.inserted += 1;
             pending.push((m, b, depth + 1));
             pending.push((a, m, depth + 1));
@@ -108,12 +120,12 @@ pub fn clear_facets(
     // that no other facet is within R of it (most centres need no more).
     let cleared = crate::par::each(cc.len(), |i| {
         let mut report = Clearance::default();
-        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, &mut report);
+        let b = clear_one(faces, cc[i], normals[i], face(i), i == 0, ball, rest_above_mm, &mut report);
         if i == 0 || !faces.point_nearer_than(centre(b), ball.keep_mm() * (1.0 - CLEAR_REL)) {
             return (b, report);
         }
         let mut report = Clearance::default();
-        (clear_one(faces, cc[i], normals[i], face(i), true, ball, &mut report), report)
+        (clear_one(faces, cc[i], normals[i], face(i), true, ball, rest_above_mm, &mut report), report)
     });
     // Then each move between two cleared centres (in chunks, in parallel): the points of those
     // that dip into a facet (most do not, and allocate nothing).
@@ -159,6 +171,7 @@ impl Clearance {
 const CHUNK: usize = 256;
 
 /// One centre `p + R·n` cleared: the new contact and normal.
+#[allow(clippy::too_many_arguments)]
 fn clear_one(
     faces: &FaceTree,
     p: DVec3,
@@ -166,15 +179,36 @@ fn clear_one(
     face: Option<usize>,
     search: bool,
     kept: DippingBall,
+    rest_above_mm: f64,
     report: &mut Clearance,
 ) -> (DVec3, DVec3) {
     let radius_mm = kept.radius_mm;
     let start = p + radius_mm * n;
-    let ball = faces.clear_ball(start, n, kept.keep_mm(), face, search);
-    report.unresolved += ball.unresolved as usize;
+    let mut ball = faces.clear_ball(start, n, kept.keep_mm(), face, search);
     if ball.rounds == 0 {
         return (p, n);
     }
+    // Lifted more than the spacing plans for: the ball touching the contact's own facet at p,
+    // let down into the crease beside it, when that leaves less over p.
+    let over = |c: DVec3| c.distance(p) - kept.keep_mm();
+    if let Some(f) = face.filter(|_| over(ball.centre) > rest_above_mm) {
+        if !search {
+            // Compared as the spacing compares them: with the ball cleared of every facet.
+            ball = faces.clear_ball(start, n, kept.keep_mm(), face, true);
+        }
+        if let Some(rest) = faces.rest_ball(p, f, kept.keep_mm()).filter(|b| !b.unresolved) {
+            if over(rest.centre) < over(ball.centre) {
+                let m = faces.face_normal(f);
+                ball = rest;
+                if ball.rounds == 0 {
+                    report.moved += 1;
+                    report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
+                    return (p, m);
+                }
+            }
+        }
+    }
+    report.unresolved += ball.unresolved as usize;
     report.moved += 1;
     report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
     // The centre stays exactly where it cleared every facet; the contact is R below it towards
@@ -220,6 +254,7 @@ mod tests {
             r,
             0.0,
             1e-3,
+            f64::INFINITY,
         );
         let kept = (DVec3::new(-8.0, 0.0, -8.0 * s), facet);
         assert_eq!((report.moved, report.inserted, report.unresolved), (1, 0, 0));
@@ -247,7 +282,7 @@ mod tests {
         // Along the ridge's vertical normal the ball dips R(1 − cos 5°) = 11.4 µm into the left
         // facet half a millimetre off the ridge: allowed 20 µm, it stays; allowed 5 µm, it keeps
         // R − 5 µm from the facet's plane.
-        let run = |dip: f64| clear_facets(&tree, &[at(-0.5)], &[DVec3::Z], &[0], r, dip, 1e-3);
+        let run = |dip: f64| clear_facets(&tree, &[at(-0.5)], &[DVec3::Z], &[0], r, dip, 1e-3, f64::INFINITY);
         let (cc, normals, report) = run(0.02);
         assert_eq!(report.moved, 0);
         assert_eq!((cc[0], normals[0]), (at(-0.5), DVec3::Z));
@@ -267,13 +302,47 @@ mod tests {
         let tree = FaceTree::new(&positions, &triangles);
         let r = 3.0;
         // Right on the crease with the vertical normal, the ball dips into both facets.
-        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 0.0, 1e-3);
+        let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 0.0, 1e-3, f64::INFINITY);
         assert_eq!((report.moved, report.unresolved), (1, 0));
         let centre = cc[0] + r * normals[0];
         // The ball of radius R in a symmetric 170° valley sits over the crease at R / cos 5°,
         // touching both facets.
         assert!(centre.x.abs() < 1e-9 && (centre.z - r / 5f64.to_radians().cos()).abs() < 1e-9, "{centre:?}");
         assert!(tree.nearest(centre, r * (1.0 - 1e-9)).is_none());
+    }
+
+    /// Issue 34 (gen015, 112, 133, 160 of the sweep): a ball lifted off its facet by more than
+    /// the spacing plans for, beside a concave crease, is let down into the crease, where it
+    /// leaves less over its contact; under that bound it is lifted as before.
+    #[test]
+    fn a_ball_lifted_beside_a_crease_is_let_down_into_it() {
+        let (mut positions, triangles) = ridge();
+        for p in &mut positions {
+            p.z = -p.z; // the valley: both facets rise 5° from the y axis
+        }
+        let tree = FaceTree::new(&positions, &triangles);
+        let (r, s) = (3.0, 5f64.to_radians().tan());
+        // 0.1 mm up the left flank with the crease's vertical normal: along it the ball dips
+        // into its own facet and is lifted R(1/cos 5° − 1) = 11.5 µm, which it leaves over the
+        // contact. Touching the flank there, it would cut the right one (the crease lets a ball
+        // down to R·tan 5° = 0.26 mm from it): resting in the crease it leaves 4.4 µm.
+        let p = DVec3::new(-0.1, 0.0, 0.1 * s);
+        let run = |above: f64| clear_facets(&tree, &[p], &[DVec3::Z], &[0], r, 0.0, 1e-3, above);
+        let lifted = r * (1.0 / 5f64.to_radians().cos() - 1.0);
+        let (cc, normals, report) = run(0.02);
+        let centre = cc[0] + r * normals[0];
+        assert_eq!(report.moved, 1);
+        assert!((centre.x - p.x).abs() < 1e-12 && (centre.distance(p) - r - lifted).abs() < 1e-9, "{centre:?}");
+        let (cc, normals, report) = run(0.005);
+        assert_eq!((report.moved, report.unresolved), (1, 0));
+        let centre = cc[0] + r * normals[0];
+        assert!(centre.x.abs() < 1e-9 && (centre.z - r / 5f64.to_radians().cos()).abs() < 1e-9, "{centre:?}");
+        assert!((centre.distance(p) - r - 0.00437).abs() < 1e-5, "{}", centre.distance(p) - r);
+        assert!(tree.nearest(centre, r * (1.0 - 1e-8)).is_none());
+        // Far up the flank the ball touching there is clear: its contact is the point itself.
+        let far = DVec3::new(-2.0, 0.0, 2.0 * s);
+        let (cc, normals, _) = clear_facets(&tree, &[far], &[DVec3::Z], &[0], r, 0.0, 1e-3, 0.0);
+        assert!(cc[0].distance(far) < 1e-12 && (normals[0] - DVec3::new(s, 0.0, 1.0).normalize()).length() < 1e-12);
     }
 
     /// Regression (issue 4, mech-holes-shark after the annulus map changed its path): two
@@ -291,7 +360,7 @@ mod tests {
         // next one is elsewhere.
         let s = 5f64.to_radians().tan();
         let cc = [DVec3::new(-2e-8, 0.0, 2e-8 * s), DVec3::new(2e-8, 0.0, 2e-8 * s), DVec3::new(0.0, 1.0, 0.0)];
-        let (out, normals, report) = clear_facets(&tree, &cc, &[DVec3::Z; 3], &[], r, 0.0, 1e-3);
+        let (out, normals, report) = clear_facets(&tree, &cc, &[DVec3::Z; 3], &[], r, 0.0, 1e-3, f64::INFINITY);
         assert_eq!((report.moved, report.merged, out.len()), (3, 1, 2), "{report:?}");
         let centres: Vec<DVec3> = out.iter().zip(&normals).map(|(&p, &n)| p + r * n).collect();
         assert!((centres[1] - centres[0] - DVec3::Y).length() < 1e-6, "{centres:?}");
@@ -310,7 +379,7 @@ mod tests {
         // Two balls resting on either facet 2 mm from the ridge: the move between them passes
         // 0.2 mm inside the ridge's offset cylinder.
         let ends = [DVec3::new(-2.0, 0.0, -2.0 * s), DVec3::new(2.0, 0.0, -2.0 * s)];
-        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], &[0, 3], r, 0.0, tol);
+        let (cc, normals, report) = clear_facets(&tree, &ends, &[left, right], &[0, 3], r, 0.0, tol, f64::INFINITY);
         // The ends are clear; every inserted midpoint had to be pushed out.
         assert_eq!((report.moved, report.unresolved), (report.inserted, 0));
         assert!(report.inserted > 2 && cc.len() == 2 + report.inserted, "{report:?}");
