@@ -136,6 +136,52 @@ fn the_blade_band_seams_are_smoothed_and_the_scallop_is_held() {
     assert!((raw.report.seams.round_after.max_deg - s.round_before.max_deg).abs() < 0.05);
 }
 
+/// The page's heat map of a Coons plan: the scallop at the vertices of the faces' own
+/// tessellation (which lie on the exact surfaces). On the plan's verification grid it is the
+/// verifier's per-vertex figure, and on the band's tessellation it holds h where the samples do.
+#[test]
+fn the_heat_map_on_the_faces_tessellation_holds_the_scallop() {
+    let text = step_band::blade_band();
+    let m = model(&text);
+    let o = quick();
+    let plan = coons::plan(&m, &ids(&m), &o, &|| 0.0).unwrap();
+    let verified = plan.report.verify.as_ref().unwrap().max_scallop_mm;
+
+    // Oracle: the verifier's own per-vertex probes on its grid.
+    let (grid, _, _) = coons::mesh::grid_surface(&plan.compound, o.scallop_mm / 20.0).unwrap();
+    let centres: Vec<DVec3> = plan.toolpath.contact_moves().iter().map(|mv| mv.centre).collect();
+    let vo = slitpath::verify::VerifyOptions {
+        radius_mm: o.radius_mm,
+        scallop_mm: o.scallop_mm,
+        samples: 1000,
+        ..Default::default()
+    };
+    let full = slitpath::verify::verify(&grid, &[centres], &vo).unwrap();
+    let mine = plan.vertex_scallop_mm(&grid).unwrap();
+    assert_eq!(mine.len(), grid.positions.len());
+    for (v, (&a, (&b, &uncovered))) in
+        mine.iter().zip(full.vertex_scallop_mm.iter().zip(&full.vertex_uncovered)).enumerate()
+    {
+        assert!(if uncovered { a.is_nan() } else { a == b }, "vertex {v}: {a} vs {b}");
+    }
+
+    // The page's surface: the faces tessellated as the STEP reader gives them.
+    let part = step::load(text.as_bytes(), &step::StepOptions::default(), &Default::default(), &|| 0.0).unwrap();
+    let heat = plan.vertex_scallop_mm(&part.mesh.surface).unwrap();
+    let covered: Vec<f64> = heat.iter().copied().filter(|s| !s.is_nan()).collect();
+    let max = covered.iter().copied().fold(0.0, f64::max);
+    let mut sorted = covered.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    eprintln!(
+        "heat: {} of {} vertices covered, max {max} mm (samples {verified}), median {median}",
+        covered.len(),
+        heat.len()
+    );
+    assert!(covered.len() as f64 >= 0.99 * heat.len() as f64, "{} of {}", covered.len(), heat.len());
+    assert!(max <= 1.02 * o.scallop_mm && median < 0.5 * o.scallop_mm, "max {max}, median {median}");
+}
+
 #[test]
 fn selections_that_are_not_a_band_are_typed_errors() {
     let o = CoonsOptions::default();

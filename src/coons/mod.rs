@@ -404,6 +404,22 @@ pub fn plan(model: &Model, faces: &[u64], o: &CoonsOptions, now: &dyn Fn() -> f6
     Ok(CoonsPlan { compound, levels: levels.v, warp: levels.warp, lines, points, toolpath, gcode, report })
 }
 
+impl CoonsPlan {
+    /// The scallop at each vertex of `surface` (a tessellation of the band's faces, as the page
+    /// draws them) under this plan's path, mm, NaN where no pass is over it: the heat map, which
+    /// the plan's own verification (on its fine grid, whose vertices nothing draws) does not
+    /// give.
+    pub fn vertex_scallop_mm(&self, surface: &crate::mesh::Surface) -> Result<Vec<f64>, CoonsError> {
+        let centres: Vec<DVec3> = self.toolpath.contact_moves().iter().map(|m| m.centre).collect();
+        let options = VerifyOptions {
+            radius_mm: self.report.radius_mm,
+            scallop_mm: self.report.scallop_mm,
+            ..VerifyOptions::default()
+        };
+        Ok(verify::vertex_scallop(surface, &[centres], &options)?)
+    }
+}
+
 /// The G-code header: the strategy and its figures (no timings: deterministic output).
 fn header(r: &CoonsReport, o: &CoonsOptions) -> Vec<(String, String)> {
     let axes = match o.axes {

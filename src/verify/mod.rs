@@ -322,6 +322,26 @@ pub fn verify(surface: &Surface, passes: &[Vec<DVec3>], options: &VerifyOptions)
     verify_on(surface, None, passes, options)
 }
 
+/// The scallop at each vertex of `surface` along its vertex normal under the path `passes`, mm
+/// ([`Verification::vertex_scallop_mm`] and its `vertex_uncovered` as NaN), without sampling
+/// the surface: the heat map of a path planned on another tessellation of the same part (the
+/// Coons band's, whose verification runs on its own fine grid). Only the radius, h and search
+/// height of `options` are used.
+pub fn vertex_scallop(
+    surface: &Surface,
+    passes: &[Vec<DVec3>],
+    options: &VerifyOptions,
+) -> Result<Vec<f64>, VerifyError> {
+    let (r, h, _, search) = check_options(options)?;
+    let volume = SweptVolume::new(passes, r)?;
+    Ok(probe_vertices(&volume, surface, h, search).iter().map(|p| p.scallop.unwrap_or(f64::NAN)).collect())
+}
+
+/// The probes of every vertex of `surface` along its normal.
+fn probe_vertices(volume: &SweptVolume, surface: &Surface, h: f64, search: f64) -> Vec<Probe> {
+    probe_all(volume, surface.positions.len(), |v| (surface.positions[v], surface.vertex_normals[v]), h, search)
+}
+
 /// [`verify`] with the facet tree of `surface` already built (its positions and triangles, as
 /// the planner keeps one): the facet valleys search it instead of building their own.
 pub fn verify_with_faces(
@@ -353,7 +373,6 @@ fn verify_on(
     let (samples, volume) = (samples?, volume?);
     let probes = probe_all(&volume, samples.len(), |i| (samples[i].position, samples[i].normal), h, search);
     // The valleys and the figures of the samples beside the probes of the vertices.
-    let vertex = |v: usize| (surface.positions[v], surface.vertex_normals[v]);
     let ((f, valley_samples), vertex_probes) = crate::par::join(
         || {
             let ball = DippingBall { radius_mm: r, dip_mm: options.valley_dip_mm };
@@ -364,7 +383,7 @@ fn verify_on(
         },
         || {
             if options.vertex_scallop {
-                probe_all(&volume, surface.positions.len(), vertex, h, search)
+                probe_vertices(&volume, surface, h, search)
             } else {
                 Vec::new()
             }

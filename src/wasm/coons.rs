@@ -3,7 +3,7 @@
 //! object), the program and flat typed arrays. Type conversion only.
 
 use super::step::StepFile;
-use super::{init, js_err, reject_unknown_fields, to_js};
+use super::{init, js_err, reject_unknown_fields, to_js, Planner};
 use crate::coons::{self, CoonsOptions};
 use crate::toolpath::Axes;
 use serde::Deserialize;
@@ -135,5 +135,12 @@ impl CoonsPlan {
     /// Unit tool axis of every move, flat xyz.
     pub fn axes(&self) -> Vec<f64> {
         self.plan.toolpath.moves.iter().flat_map(|m| m.axis.to_array()).collect()
+    }
+
+    /// The scallop under this plan's path at each vertex of `part`'s surface (the band's faces as
+    /// `Planner.fromStepFile` makes them), mm, NaN where no pass is over it: the heat map.
+    #[wasm_bindgen(js_name = vertexScallopOn)]
+    pub fn vertex_scallop_on(&self, part: &Planner) -> Result<Vec<f64>, JsError> {
+        self.plan.vertex_scallop_mm(part.mesh().1).map_err(js_err)
     }
 }

@@ -1,6 +1,6 @@
 // End-to-end tests of STEP input on the page (issue 36) in Debian's headless Chromium: the
 // bundled STEP sample (seed 004's blade band) read in the worker, its faces listed and drawn,
-// planned with the Coons band spiral; a face clicked in the 3D view leaves the band (a typed
+// planned with the Coons band spiral (its scallop heat map on the faces); a face clicked in the 3D view leaves the band (a typed
 // error with the way out) and clicked again closes it; the download is byte-identical to
 // `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on;
 // the ball-end spiral refuses the band's walls (undercuts for a 3-axis tool) and plans a block of
@@ -64,6 +64,15 @@ describe("STEP input on the page", { concurrency: false }, () => {
     await page.waitForTimeout(300);
     const s = await viewStats(page, "view-3d");
     assert.ok(s.nonBackground > 0.05 && s.colours > 30, `faces and path drawn: ${JSON.stringify(s)}`);
+    // The scallop heat map on the band's faces (the part), with its legend; the layer toggles it.
+    assert.equal(await page.getByTestId("legend").isVisible(), true, "the scallop legend shows");
+    assert.equal(await page.locator("#legend-max").textContent(), "h = 0.02 mm");
+    await page.getByTestId("layer-heat").uncheck();
+    await page.waitForTimeout(300);
+    const plain = await viewStats(page, "view-3d");
+    assert.equal(await page.getByTestId("legend").isVisible(), false, "no legend without the heat map");
+    assert.ok(s.colours > plain.colours + 10, `the heat map colours the faces: ${s.colours} colours with it, ${plain.colours} without`);
+    await page.getByTestId("layer-heat").check();
     await page.screenshot({ path: screenshotPath("step-1-coons.png"), fullPage: true });
   });
 

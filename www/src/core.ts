@@ -2,7 +2,7 @@
 // Everything else imports the types and helpers it needs from here, never from ../pkg, so the
 // rest of the page does not depend on how the core is built. It runs inside the worker.
 
-import init, { type FlankPlan as CoreFlankPlan, Planner, StepFile as CoreStepFile, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, planFlankOnStepFile as corePlanFlankOnStepFile, version } from "../pkg/slitpath.js";
+import init, { type CoonsPlan as CoreCoonsPlan, type FlankPlan as CoreFlankPlan, Planner, StepFile as CoreStepFile, isStep as coreIsStep, planCoons as corePlanCoons, planFlank as corePlanFlank, planFlankOnStepFile as corePlanFlankOnStepFile, version } from "../pkg/slitpath.js";
 import type { FlankOptions, FlankOutput, FlankReport } from "./flank-types";
 import type { CoonsOptions, CoonsOutput, CoonsReport, StepFace, StepFacesOutput, StepOptions } from "./step-types";
 
@@ -302,6 +302,11 @@ export class Part {
   }
 
   /** STEP input: the faces the part is made of (the selection, or the top of a solid opened without one); `null` for an STL. */
+  /** The scallop under a Coons plan's path at each vertex of this part's surface (its heat map). */
+  coonsScallop(plan: CoreCoonsPlan): Float64Array {
+    return plan.vertexScallopOn(this.planner);
+  }
+
   stepFaces(): number[] | null {
     const ids = this.planner.stepFaceIds();
     return ids ? Array.from(ids) : null;
@@ -469,9 +474,9 @@ export async function stepFaces(step: Uint8Array, stepOptions?: StepOptions, onP
 /**
  * Plans seed 004's Coons spiral over the band of faces `faces` of a STEP file already open (not
  * read again); throws an Error whose message says why when the faces are not a closed band of
- * four-sided faces.
+ * four-sided faces. With `part` (those faces made the part), the scallop at its vertices too.
  */
-export async function planCoons(model: StepModel, faces: number[], options: CoonsOptions): Promise<CoonsOutput> {
+export async function planCoons(model: StepModel, faces: number[], options: CoonsOptions, part?: Part): Promise<CoonsOutput> {
   await initCore();
   const plan = corePlanCoons(model.file, Float64Array.from(faces), options);
   try {
@@ -483,6 +488,7 @@ export async function planCoons(model: StepModel, faces: number[], options: Coon
       pathFaces: plan.pathFaces(),
       pathTips: plan.tips(),
       pathAxes: plan.axes(),
+      ...(part ? { vertexScallop: part.coonsScallop(plan) } : {}),
     };
   } finally {
     plan.free();

@@ -229,12 +229,7 @@ async function show(result: PlanResult, planned: FullPlanOptions): Promise<void>
   scrub.value = "0";
   scrub.disabled = points === 0;
   setCursor(0);
-  byId("legend-title").textContent = "scallop";
-  byId("legend-bar").style.background = heatGradientCss();
-  byId("legend-min").textContent = "0";
-  byId("legend-max").textContent = `h = ${planned.scallopMm} mm`;
-  byId("legend-extra").hidden = false;
-  legend.hidden = !layerHeat.checked;
+  showScallopLegend(planned.scallopMm);
   setOutputs();
   const { path } = result.report;
   await drawn;
@@ -264,18 +259,34 @@ async function showFlank(result: FlankResult, planned: FlankFormOptions): Promis
   setStatus("planned", `${fileName}: flank, ${result.report.guide.strips} strips, ${output.moves} moves, ${(output.estimated_time_s / 60).toFixed(1)} min — in ${(result.ms / 1000).toFixed(1)} s`);
 }
 
-/** Shows a Coons band plan: the path on the STEP faces, the tool and its axes. */
+/** The heat map's legend: the scallop from 0 to h. */
+function showScallopLegend(scallopMm: number): void {
+  byId("legend-title").textContent = "scallop";
+  byId("legend-bar").style.background = heatGradientCss();
+  byId("legend-min").textContent = "0";
+  byId("legend-max").textContent = `h = ${scallopMm} mm`;
+  byId("legend-extra").hidden = false;
+  legend.hidden = !layerHeat.checked;
+}
+
+/**
+ * Shows a Coons band plan: the path on the STEP faces, the tool and its axes, and the scallop
+ * heat map on the part's surface when the part is the band's faces.
+ */
 async function showCoons(result: CoonsResult, planned: CoonsFormOptions): Promise<void> {
   shown = { gcode: result.gcode, strategy: "coons", coons: planned, faces: result.faces };
   showStrategy("coons");
   renderCoonsMetrics(metricsBox, result);
   const points = result.pathContacts.length / 3;
+  const heat = result.drawing.heat !== undefined;
+  stepPage.setSurfaceHidden(!heat);
   const drawn = views.setCoons(result, planned.radiusMm, planned.axes === 5); // transfers the arrays it draws
   scrub.max = String(Math.max(0, points - 1));
   scrub.value = "0";
   scrub.disabled = points === 0;
   setCursor(0);
-  legend.hidden = true;
+  if (heat) showScallopLegend(result.report.scallop_mm);
+  else legend.hidden = true;
   setOutputs();
   const r = result.report;
   await drawn;

@@ -120,6 +120,8 @@ export interface CoonsOutput {
   /** xyz tool tip and unit axis per move. */
   pathTips: Float64Array;
   pathAxes: Float64Array;
+  /** The scallop at each vertex of the part's surface under the path, mm (NaN: no pass over it), when the part is the band's faces. */
+  vertexScallop?: Float64Array;
 }
 
 export type { Vec3 };

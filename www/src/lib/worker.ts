@@ -201,14 +201,19 @@ async function coons(request: Extract<WorkerRequest, { type: "coons" }>): Promis
   if (stepFile === undefined) throw new Error("the Coons band strategy needs a STEP file: open a .step or .stp part");
   const started = performance.now();
   post({ type: "progress", id: request.id, stage: "Coons band spiral", done: 0, total: 2 });
-  const output = await planCoons(stepFile.model, request.faces, { ...request.options, partName: partName(stepFile.name) });
+  // The part shown is the band's faces (the page makes the selection the part): its heat map too.
+  const sameFaces = (a: number[] | null, b: number[]) => a !== null && a.length === b.length && [...a].sort().join() === [...b].sort().join();
+  const part = current?.source?.model === stepFile.model && sameFaces(current.part.stepFaces(), request.faces) ? current.part : undefined;
+  const output = await planCoons(stepFile.model, request.faces, { ...request.options, partName: partName(stepFile.name) }, part);
   post({ type: "progress", id: request.id, stage: "preparing the views", done: 1, total: 2 });
-  // The report's radius is the one planned with (the core's default when none was given).
-  const result: CoonsResult = { ...output, faces: request.faces, drawing: coonsDrawing(output, output.report.radius_mm, COARSE_3D_TOLERANCE), ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
+  // The report's radius and scallop are the ones planned with (the core's defaults when none was given).
+  const r = output.report;
+  const drawing = coonsDrawing(output, r.radius_mm, COARSE_3D_TOLERANCE, r.scallop_mm);
+  const result: CoonsResult = { ...output, faces: request.faces, drawing, ms: performance.now() - started, wasmMemoryBytes: coreMemoryBytes() };
   const { drawing: d } = result;
   post(
     { type: "coonsPlanned", id: request.id, plan: result },
-    [...buffers(result.pathContacts, result.pathNormals, result.pathFaces, result.pathTips, result.pathAxes, d.moveOfPoint), ...[d.path, d.pathCoarse].flatMap(polylineBuffers)],
+    [...buffers(result.pathContacts, result.pathNormals, result.pathFaces, result.pathTips, result.pathAxes, result.vertexScallop ?? null, d.moveOfPoint, d.heat ?? null), ...[d.path, d.pathCoarse].flatMap(polylineBuffers)],
   );
 }
 

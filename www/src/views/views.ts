@@ -92,7 +92,7 @@ export class Views {
     const { pathContacts, pathTips, pathAxes, drawing: d } = plan;
     const view: CoonsView = { pathContacts, pathTips, pathAxes, moveOfPoint: d.moveOfPoint, drawing: d, radiusMm, fiveAxis };
     const polylines = [d.path, d.pathCoarse].flatMap((p) => [p.positions, p.colours, p.segments, p.points]);
-    this.send({ type: "coons", id, plan: view }, buffers(pathContacts, pathTips, pathAxes, d.moveOfPoint, ...polylines));
+    this.send({ type: "coons", id, plan: view }, buffers(pathContacts, pathTips, pathAxes, d.moveOfPoint, d.heat ?? null, ...polylines));
     return drawn;
   }
 
