@@ -156,11 +156,17 @@ impl FaceTree {
     }
 
     /// A lower bound of the squared distance from `p` to the faces of node `index`: the larger
-    /// of its two boxes' (the oriented one is tested only when the axis-aligned one is nearer).
+    /// of its two boxes'.
     #[inline]
     fn node_distance2(&self, index: usize, node: &Node, p: DVec3) -> f64 {
-        let d2 = node.distance2(p);
-        d2.max(self.oriented[index].distance2(p))
+        node.distance2(p).max(self.oriented[index].distance2(p))
+    }
+
+    /// Whether every face of node `index` is farther than √`limit2` from `p`: either box is
+    /// (the oriented one is measured only when the axis-aligned one is nearer).
+    #[inline]
+    fn node_beyond(&self, index: usize, node: &Node, p: DVec3, limit2: f64) -> bool {
+        node.distance2(p) > limit2 || self.oriented[index].distance2(p) > limit2
     }
 
     /// Whether some facet is nearer than `limit` to `p`: [`FaceTree::nearest`]`(p, limit).is_some()`,
@@ -168,7 +174,7 @@ impl FaceTree {
     pub fn point_nearer_than(&self, p: DVec3, limit: f64) -> bool {
         let limit2 = limit * limit;
         let mut walk = Walk::new(&self.nodes);
-        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_distance2(i, node, p) > limit2) {
+        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_beyond(i, node, p, limit2)) {
             for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let d = n.dot(p) - offset;
@@ -199,7 +205,7 @@ impl FaceTree {
         let reach = limit + half;
         let (limit2, reach2) = (limit * limit, reach * reach);
         let mut walk = Walk::new(&self.nodes);
-        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_distance2(i, node, mid) > reach2) {
+        while let Some(slots) = walk.next_leaf_at(&self.nodes, |i, node| self.node_beyond(i, node, mid, reach2)) {
             for slot in slots {
                 let (n, offset) = self.planes[slot];
                 let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
