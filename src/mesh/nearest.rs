@@ -169,6 +169,16 @@ impl FaceTree {
         node.distance2(p) > limit2 || self.oriented[index].distance2(p) > limit2
     }
 
+    /// [`FaceTree::nearest`]`(p, limit)`, after the cheaper early-exit test: most balls are
+    /// clear, and that settles them without the nearest point (the same predicate).
+    fn nearest_if_nearer(&self, p: DVec3, limit: f64) -> Option<Nearest> {
+        if self.point_nearer_than(p, limit) {
+            self.nearest(p, limit)
+        } else {
+            None
+        }
+    }
+
     /// Whether some facet is nearer than `limit` to `p`: [`FaceTree::nearest`]`(p, limit).is_some()`,
     /// stopping at the first such facet.
     pub fn point_nearer_than(&self, p: DVec3, limit: f64) -> bool {
@@ -338,9 +348,7 @@ impl FaceTree {
         if !search {
             return ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false };
         }
-        // Most balls are clear already: the early-exit test settles those without the nearest
-        // point (the same predicate, distance < limit).
-        while let Some(hit) = if self.point_nearer_than(c, limit) { self.nearest(c, limit) } else { None } {
+        while let Some(hit) = self.nearest_if_nearer(c, limit) {
             if rounds == CLEAR_ROUNDS {
                 return ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: true };
             }
@@ -369,7 +377,7 @@ impl FaceTree {
         let start = p + radius * m;
         let mut c = start;
         let (mut rounds, mut last) = (0, None);
-        while let Some(hit) = if self.point_nearer_than(c, limit) { self.nearest(c, limit) } else { None } {
+        while let Some(hit) = self.nearest_if_nearer(c, limit) {
             if rounds == CLEAR_ROUNDS {
                 return Some(ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: true });
             }

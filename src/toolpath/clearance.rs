@@ -293,13 +293,16 @@ mod tests {
         assert!(tree.nearest(centre, (r - 0.005) * (1.0 - 1e-8)).is_none());
     }
 
+    /// The ridge turned over: a valley whose two facets rise 5° from the y axis.
+    fn valley() -> FaceTree {
+        let (mut positions, triangles) = ridge();
+        positions.iter_mut().for_each(|p| p.z = -p.z);
+        FaceTree::new(&positions, &triangles)
+    }
+
     #[test]
     fn a_ball_in_a_concave_crease_settles_touching_both_facets() {
-        let (mut positions, triangles) = ridge();
-        for p in &mut positions {
-            p.z = -p.z; // the valley: both facets rise 5° from the y axis
-        }
-        let tree = FaceTree::new(&positions, &triangles);
+        let tree = valley();
         let r = 3.0;
         // Right on the crease with the vertical normal, the ball dips into both facets.
         let (cc, normals, report) = clear_facets(&tree, &[DVec3::ZERO], &[DVec3::Z], &[], r, 0.0, 1e-3, f64::INFINITY);
@@ -316,11 +319,7 @@ mod tests {
     /// leaves less over its contact; under that bound it is lifted as before.
     #[test]
     fn a_ball_lifted_beside_a_crease_is_let_down_into_it() {
-        let (mut positions, triangles) = ridge();
-        for p in &mut positions {
-            p.z = -p.z; // the valley: both facets rise 5° from the y axis
-        }
-        let tree = FaceTree::new(&positions, &triangles);
+        let tree = valley();
         let (r, s) = (3.0, 5f64.to_radians().tan());
         // 0.1 mm up the left flank with the crease's vertical normal: along it the ball dips
         // into its own facet and is lifted R(1/cos 5° − 1) = 11.5 µm, which it leaves over the
