@@ -4,7 +4,8 @@
 //! breaks [`slitpath::bench::SWEEP_LIMITS`]). Asserts nothing.
 //!
 //! `SLITPATH_SWEEP_PARTS=N` sweeps N parts, `SLITPATH_SWEEP_SEEDS=3,40,…` those seeds only,
-//! `SLITPATH_SWEEP_FACES=LO:HI` other face counts.
+//! `SLITPATH_SWEEP_FACES=LO:HI` other face counts, `SLITPATH_SWEEP_REPORTS=DIR` writes each part's
+//! STL and plan report (`DIR/genNNN.stl`, `.json`) there.
 
 use slitpath::bench::{format_sweep, run_sweep, SWEEP_FACES};
 use slitpath::fixtures::generated;
@@ -40,6 +41,16 @@ fn main() {
             let part = generated::part(seed, faces.clone());
             match run_sweep(&part, 100_000, &now) {
                 Ok(row) => {
+                    if let Ok(dir) = std::env::var("SLITPATH_SWEEP_REPORTS") {
+                        let path = std::path::Path::new(&dir).join(format!("gen{seed:03}"));
+                        std::fs::write(
+                            path.with_extension("stl"),
+                            slitpath::mesh::stl::write_binary(&part.mesh, &part.name),
+                        )
+                        .expect("writes the part");
+                        std::fs::write(path.with_extension("json"), serde_json::to_string_pretty(&row.report).unwrap())
+                            .expect("writes the report");
+                    }
                     println!("{}", format_sweep(&row));
                     lengths.push(row.length_over_ideal);
                     *methods.entry(format!("{:?}", row.flatten.method)).or_insert(0) += 1;

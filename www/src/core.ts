@@ -140,6 +140,22 @@ export interface OptimiseReport {
   after?: { e_w: number; e_n: number; e_g: number; total: number };
 }
 
+/** A path spaced again because its verification left more than h (Rust `slitpath::plan::SpacingRetry`). */
+export interface SpacingRetry {
+  field: "tpsfo" | "conformal";
+  /** The first path's target (fraction of h), what it left outside the facet valleys over h, its length. */
+  target_fraction: number;
+  max_over_h: number;
+  length_mm: number;
+  /** The same for the path spaced again (null when its plan failed: see `error`). */
+  retry_target_fraction: number;
+  retry_max_over_h: number | null;
+  retry_length_mm: number | null;
+  error?: string;
+  /** Whether the path spaced again was kept. */
+  kept: boolean;
+}
+
 /** The plan report: the CLI's `--report` JSON. */
 export interface PlanReport {
   options: Record<string, unknown>;
@@ -158,6 +174,8 @@ export interface PlanReport {
   rings: unknown;
   /** Absent with `optimise: "none"`. */
   optimise?: OptimiseReport;
+  /** Paths whose own verification left more than h outside the facet valleys, spaced again for a smaller cusp (absent when the first kept h). */
+  spacing_retries?: SpacingRetry[];
   path: {
     length_mm: number;
     /** The length over the flat-plate bound area / (2·√(2Rh)). */

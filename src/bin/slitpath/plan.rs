@@ -131,6 +131,9 @@ pub fn run(
     if let Some(note) = handle_note(&plan.report.mesh) {
         eprintln!("note: {name}: {note}");
     }
+    for retry in &plan.report.spacing_retries {
+        eprintln!("note: {name}: {}", retry.describe());
+    }
     for warning in &plan.report.warnings {
         eprintln!("warning: {name}: {warning}");
     }

@@ -17,8 +17,18 @@ function rows(plan: PlanResult, limit: number): Row[] {
   const minutes = path.time_min;
   const rejected = origin.rejected?.length ?? 0;
   const optimise = report.optimise;
+  const retry = report.spacing_retries?.at(-1);
   return [
-    ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
+    [
+      "metric-rings",
+      "Rings",
+      n0.format(plan.ringRadii.length) +
+        (retry === undefined
+          ? ""
+          : ` — the first path left ${n3.format(retry.max_over_h)} h; spaced again for ${n3.format(retry.retry_target_fraction)} h` +
+            (retry.kept ? "" : ", not kept")),
+      retry !== undefined && !retry.kept,
+    ],
     ["metric-length", "Path length", `${n1.format(path.length_mm)} mm (${n0.format(path.points)} points)`],
     // The flat-plate bound area / (2·√(2Rh)): evenly spaced passes on a gently curved part come
     // to about 1.05.

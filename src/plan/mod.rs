@@ -10,21 +10,26 @@
 //! The G-code header carries the options and the path figures, never timings or versions, so
 //! that the output is byte-identical wherever it was planned.
 
-use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, FlattenReport, Flattening};
+use crate::flatten::{self, FlattenError, FlattenInput, FlattenOptions, Flattening};
 use crate::gcode::{self, GcodeError, GcodeOptions, Post};
-use crate::mesh::creases::FacetValleys;
 use crate::mesh::nearest::FaceTree;
 use crate::mesh::refine::{refine_hole_rims, RefineOptions};
 use crate::mesh::{MeshOutput, MeshReport, Surface};
-use crate::optimise::{self, OptimiseError, OptimiseOptions, OptimiseReport};
+use crate::optimise::{self, OptimiseError, OptimiseOptions};
 use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
-use crate::slitmap::{Mode, PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
+use crate::slitmap::{PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
 use crate::spacing::{Lift, Rings, SpacingError, SpacingIndex, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
-use crate::toolpath::{self, Axes, Clearance, Toolpath, ToolpathError, ToolpathOptions};
+use crate::toolpath::{self, Axes, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
+
+mod paths;
+mod report;
+use paths::{Field, Finished, Run};
+pub use paths::{SpacingRetry, OPTIMISED_TARGET_FRACTION, RETRY_AIM};
+pub use report::*;
 
 /// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the
 /// CLI's and the page's.
@@ -346,41 +351,9 @@ impl Planner {
         let mut rejected = Vec::new();
         let tpsfo = options.optimise == Optimise::Tpsfo;
         let finished = loop {
-            // The optimised field's path is verified like any other; where it breaks what the
-            // conformal map's keeps (a field the spacing could not prove everywhere, the
-            // stage failing), the conformal map's path is planned too and the better one kept.
-            let conformal = tpsfo.then(|| map.clone());
-            let attempt = self.finish(&origin, map, tpsfo, options, &spiral_options, &mut stage, &mut timings, now);
-            let attempt = match (attempt, conformal) {
-                (Ok(fin), Some(conformal)) if fin.exceeds(options.scallop_mm) => {
-                    match self.finish(
-                        &origin,
-                        conformal,
-                        false,
-                        options,
-                        &spiral_options,
-                        &mut stage,
-                        &mut timings,
-                        now,
-                    ) {
-                        Ok(plain) if plain.better_than(&fin, options.scallop_mm) => {
-                            let reason = format!(
-                                "the optimised field's path left {:.3} h, the conformal map's {:.3} h",
-                                fin.max_over_h(options.scallop_mm),
-                                plain.max_over_h(options.scallop_mm)
-                            );
-                            Ok(plain.kept_instead_of(fin, reason))
-                        }
-                        _ => Ok(fin),
-                    }
-                }
-                (Err(e), Some(conformal)) => {
-                    let optimised_error = e.to_string();
-                    self.finish(&origin, conformal, false, options, &spiral_options, &mut stage, &mut timings, now)
-                        .map(|plain| plain.kept_after_error(optimised_error))
-                }
-                (attempt, _) => attempt,
-            };
+            let mut run =
+                Run { options, spiral_options: &spiral_options, stage: &mut stage, timings: &mut timings, now };
+            let attempt = self.path_from(&mut run, &origin, map, tpsfo);
             match attempt {
                 Ok(done) => break done,
                 Err(e) if e.depends_on_pole() => {
@@ -415,31 +388,62 @@ impl Planner {
             + timings.toolpath
             + timings.verify;
         stage(7);
-        let Finished { map, optimise, rings, spiral, toolpath, path, summary, verification, gcode } = finished;
+        let Finished {
+            field: Field { map, .. },
+            optimise,
+            rings,
+            spiral,
+            toolpath,
+            path,
+            summary,
+            verification,
+            gcode,
+            retries,
+            ..
+        } = finished;
         let mut report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
         report.origin.rejected = rejected;
         report.optimise = optimise;
+        report.spacing_retries = retries;
         Ok(Plan { origin, map, rings, spiral, toolpath, path, gcode, report })
     }
 
-    /// From the pole's slit map on: the field (optimised when `tpsfo`), rings, spiral, tool
-    /// positions, the verification and the G-code.
-    #[allow(clippy::too_many_arguments)]
-    fn finish(
+    /// The field of the pole's slit map `map`: optimised (seed 003) when `tpsfo`, else the map as
+    /// it is; with the optimisation's report.
+    fn field(
         &self,
+        run: &mut Run,
         origin: &Origin,
         map: SlitMap,
         tpsfo: bool,
-        options: &PlanOptions,
-        spiral_options: &SpiralOptions,
-        stage: &mut dyn FnMut(usize),
-        timings: &mut Timings,
-        now: &dyn Fn() -> f64,
-    ) -> Result<Finished, PlanError> {
-        let r = options.radius_mm;
-        let (map, optimise, rings, spiral) =
-            self.rings_and_spiral(map, tpsfo, options, spiral_options, stage, timings, now, &origin.energy.slopes)?;
+    ) -> Result<(Field, Option<OptimiseSummary>), PlanError> {
+        (run.stage)(1);
+        let t = (run.now)();
+        let optimise_options = OptimiseOptions {
+            radius_mm: run.options.radius_mm,
+            alpha: run.options.alpha,
+            max_iterations: if tpsfo { OptimiseOptions::default().max_iterations } else { 0 },
+            ..OptimiseOptions::default()
+        };
+        let optimised = optimise::optimise(&self.surface, &map, &origin.energy.slopes, &optimise_options);
+        run.timings.optimise += (run.now)() - t;
+        let optimised = optimised?;
+        let optimise = optimised.report.map(|o| OptimiseSummary { stage: Some(o), ..OptimiseSummary::default() });
+        Ok((Field { map: optimised.map, optimised: optimise.is_some() }, optimise))
+    }
 
+    /// From a field on: rings spaced for a cusp of `target_fraction`·h, the spiral, tool
+    /// positions, the verification and the G-code.
+    fn finish(
+        &self,
+        run: &mut Run,
+        origin: &Origin,
+        field: Field,
+        target_fraction: f64,
+    ) -> Result<Finished, PlanError> {
+        let (rings, spiral) = self.rings_and_spiral(run, &field.map, target_fraction)?;
+        let Run { options, spiral_options, stage, timings, now } = run;
+        let r = options.radius_mm;
         stage(4);
         let t = now();
         let toolpath_options = ToolpathOptions {
@@ -492,7 +496,7 @@ impl Planner {
         };
         let mut post_ms = 0.0;
         let (verification, gcode) = crate::par::beside(verify_centres, || {
-            let header = header_lines(options, origin, &rings, &summary, optimise.is_some());
+            let header = header_lines(options, origin, &rings, &summary, field.optimised);
             let gcode_options = GcodeOptions {
                 post: options.post,
                 part_name: options.part_name.clone(),
@@ -506,47 +510,36 @@ impl Planner {
         let (gcode, verification) = (gcode?, verification?);
         timings.post += post_ms;
         timings.verify += now() - t;
-        Ok(Finished { map, optimise, rings, spiral, toolpath, path, summary, verification, gcode })
+        Ok(Finished {
+            field,
+            optimise: None,
+            rings,
+            spiral,
+            toolpath,
+            path,
+            summary,
+            verification,
+            gcode,
+            retries: Vec::new(),
+        })
     }
 
-    /// The rings of the pole's slit map `map` (its field optimised first when `tpsfo`) and the
-    /// spiral through them, with the map they were spaced on.
-    #[allow(clippy::too_many_arguments)]
+    /// The rings of `map`'s field spaced for a cusp of `target_fraction`·h and the spiral through
+    /// them.
     fn rings_and_spiral(
         &self,
-        map: SlitMap,
-        tpsfo: bool,
-        options: &PlanOptions,
-        spiral_options: &SpiralOptions,
-        stage: &mut dyn FnMut(usize),
-        timings: &mut Timings,
-        now: &dyn Fn() -> f64,
-        slopes: &[f64],
-    ) -> Result<(SlitMap, Option<OptimiseSummary>, Rings, Spiral), PlanError> {
-        stage(1);
-        let t = now();
-        let optimise_options = OptimiseOptions {
-            radius_mm: options.radius_mm,
-            alpha: options.alpha,
-            max_iterations: if tpsfo { OptimiseOptions::default().max_iterations } else { 0 },
-            ..OptimiseOptions::default()
-        };
-        let optimised = optimise::optimise(&self.surface, &map, slopes, &optimise_options);
-        timings.optimise += now() - t;
-        let optimised = optimised?;
-        let (map, optimise_report) =
-            (optimised.map, optimised.report.map(|o| OptimiseSummary { stage: Some(o), ..OptimiseSummary::default() }));
+        run: &mut Run,
+        map: &SlitMap,
+        target_fraction: f64,
+    ) -> Result<(Rings, Spiral), PlanError> {
+        let Run { options, spiral_options, stage, timings, now } = run;
         stage(2);
         let t = now();
         let spacing_options = SpacingOptions {
             radius_mm: options.radius_mm,
             scallop_mm: options.scallop_mm,
             facet_lift: options.facets == Facets::Exact,
-            // An optimised field's rings bend more between the meridians than the conformal
-            // map's circles, and the spacing's tests between them are looser (the gate's levels
-            // pass up to h/4 under a peak): 0.95 left 1.01–1.1 h on a third of the generated
-            // parts, 0.92 on a sixth, for 1.5 % more path.
-            target_fraction: if tpsfo { OPTIMISED_TARGET_FRACTION } else { SpacingOptions::default().target_fraction },
+            target_fraction,
             ..SpacingOptions::default()
         };
         // One inverse map for the spacing and the spiral, built beside the spacing's indexes of
@@ -554,8 +547,8 @@ impl Planner {
         // and triangles.
         let surface = self.riding(options.facets);
         let (lift, index) = crate::par::join(
-            || Lift::new(surface, &map),
-            || SpacingIndex::new(surface, &map, &self.faces, &spacing_options),
+            || Lift::new(surface, map),
+            || SpacingIndex::new(surface, map, &self.faces, &spacing_options),
         );
         let rings = index.and_then(|index| index.rings(&lift));
         timings.spacing += now() - t;
@@ -564,7 +557,7 @@ impl Planner {
         let t = now();
         let spiral = spiral::spiral_on(&lift, &rings, spiral_options);
         timings.spiral += now() - t;
-        Ok((map, optimise_report, rings, spiral?))
+        Ok((rings, spiral?))
     }
 
     /// The planner's verification of `toolpath` planned with `options`, its samples drawn with
@@ -614,63 +607,6 @@ impl Planner {
         (hi - lo).length()
     }
 }
-
-/// A plan from one slit map on (see [`Planner::finish`]).
-struct Finished {
-    map: SlitMap,
-    optimise: Option<OptimiseSummary>,
-    rings: Rings,
-    spiral: Spiral,
-    toolpath: Toolpath,
-    path: PathMetrics,
-    summary: PathSummary,
-    verification: Option<Verification>,
-    gcode: String,
-}
-
-impl Finished {
-    /// The verified largest scallop outside the facet valleys over `h` (0 unverified).
-    fn max_over_h(&self, h: f64) -> f64 {
-        self.verification.as_ref().map_or(0.0, |v| v.max_scallop_outside_valleys_mm / h)
-    }
-
-    /// Whether the verified path leaves more than `h` outside the facet valleys.
-    fn exceeds(&self, h: f64) -> bool {
-        self.max_over_h(h) > 1.0
-    }
-
-    /// Whether this path keeps `h` where `other` does not, or, both leaving more, leaves less.
-    fn better_than(&self, other: &Finished, h: f64) -> bool {
-        let (a, b) = (self.max_over_h(h), other.max_over_h(h));
-        (a <= 1.0 && b > 1.0) || (a > 1.0 && b > 1.0 && a < b)
-    }
-
-    /// This (conformal) path, kept instead of the optimised one `optimised` for `reason`: the
-    /// report keeps the optimisation's figures and says why its path was not used.
-    fn kept_instead_of(mut self, optimised: Finished, reason: String) -> Self {
-        self.optimise = Some(OptimiseSummary {
-            path_field: "conformal",
-            fallback: Some(reason),
-            optimised_length_mm: Some(optimised.summary.length_mm),
-            ..optimised.optimise.unwrap_or_default()
-        });
-        self
-    }
-
-    /// This (conformal) path, planned because the optimised field's failed with `error`.
-    fn kept_after_error(mut self, error: String) -> Self {
-        self.optimise = Some(OptimiseSummary {
-            path_field: "conformal",
-            fallback: Some(format!("the optimised field's plan failed: {error}")),
-            ..OptimiseSummary::default()
-        });
-        self
-    }
-}
-
-/// The scallop fraction the rings of an optimised field are spaced for (see
-/// [`SpacingOptions::target_fraction`]; the conformal map's keep the default 0.95).
-pub const OPTIMISED_TARGET_FRACTION: f64 = 0.92;
 
 /// `auto` (and `centroid`) try at most this many other poles when a path cannot be built from
 /// the first one.
@@ -760,308 +696,3 @@ fn check_options(o: &PlanOptions, surface: &Surface) -> Result<(), PlanError> {
 /// The longest flat-plate bound area / (2·√(2Rh)) a plan may have, mm: 50 km, some 5·10⁷
 /// G-code lines, about 25 times the 2 km of a 1 m² panel at R 3, h 0.005.
 pub const MAX_IDEAL_PATH_MM: f64 = 5.0e7;
-
-/// The path figures of the report.
-#[derive(Debug, Clone, Serialize)]
-pub struct PathSummary {
-    pub length_mm: f64,
-    /// The length over the flat-plate bound area / (2·√(2Rh)) (DESIGN.md, "Path length at equal
-    /// finish"): about 1.05 for evenly spaced passes on a gently curved part.
-    pub length_over_ideal: f64,
-    pub points: usize,
-    pub retractions: usize,
-    pub max_turn_deg: f64,
-    pub rho2: f64,
-    pub time_min: f64,
-    /// Ball centres moved off facets nearer than R ([`toolpath::clear_facets`]; zeros with
-    /// [`Facets::Smooth`]).
-    pub clearance: Clearance,
-}
-
-/// The optimisation as the plan report shows it: the stage's own report, and which field the
-/// written path follows.
-#[derive(Debug, Clone, Serialize)]
-pub struct OptimiseSummary {
-    /// `tpsfo` when the path follows the optimised field, `conformal` when the planner kept the
-    /// slit map's own (see `fallback`).
-    pub path_field: &'static str,
-    /// What the optimisation did (absent when it failed).
-    #[serde(flatten)]
-    pub stage: Option<OptimiseReport>,
-    /// Why the conformal map's path was written instead of the optimised field's: the optimised
-    /// one failed, or it left more than h where the conformal map's does not.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub fallback: Option<String>,
-    /// The optimised path's length when it was not kept, mm.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub optimised_length_mm: Option<f64>,
-}
-
-impl Default for OptimiseSummary {
-    fn default() -> Self {
-        Self { path_field: "tpsfo", stage: None, fallback: None, optimised_length_mm: None }
-    }
-}
-
-/// The options as the report shows them (plain values, the CLI's names).
-#[derive(Debug, Clone, Serialize)]
-pub struct OptionsReport {
-    pub radius_mm: f64,
-    pub scallop_mm: f64,
-    pub origin: String,
-    pub direction: Direction,
-    pub cut: Cut,
-    pub axes: u8,
-    pub lead_deg: Option<f64>,
-    pub tilt_deg: Option<f64>,
-    pub post: &'static str,
-    pub feed_mm_min: f64,
-    pub plunge_feed_mm_min: f64,
-    pub spindle_rpm: f64,
-    pub safe_z_mm: Option<f64>,
-    pub verify_samples: usize,
-    pub facets: Facets,
-}
-
-impl OptionsReport {
-    fn new(o: &PlanOptions) -> Self {
-        let (axes, lead_deg, tilt_deg) = match o.axes {
-            Axes::Three { .. } => (3, None, None),
-            Axes::Five { lead_deg, tilt_deg } => (5, Some(lead_deg), Some(tilt_deg)),
-        };
-        Self {
-            radius_mm: o.radius_mm,
-            scallop_mm: o.scallop_mm,
-            origin: origin_name(&o.origin),
-            direction: o.direction,
-            cut: o.cut,
-            axes,
-            lead_deg,
-            tilt_deg,
-            post: o.post.name(),
-            feed_mm_min: o.feed_mm_min,
-            plunge_feed_mm_min: o.plunge_feed_mm_min,
-            spindle_rpm: o.spindle_rpm,
-            safe_z_mm: o.safe_z_mm,
-            verify_samples: o.verify_samples,
-            facets: o.facets,
-        }
-    }
-}
-
-/// `auto`, `centroid`, `hole:N`, `X,Y,Z` (3D point) or `uv:U,V` (flattened-plane pole).
-pub fn origin_name(o: &OriginChoice) -> String {
-    match o {
-        OriginChoice::Auto => "auto".into(),
-        OriginChoice::Centroid => "centroid".into(),
-        OriginChoice::Hole(n) => format!("hole:{n}"),
-        OriginChoice::Point3d(p) => format!("{},{},{}", p.x, p.y, p.z),
-        OriginChoice::Plane(p) => format!("uv:{},{}", p.x, p.y),
-    }
-}
-
-#[derive(Debug, Clone, Serialize)]
-pub struct OriginReport {
-    pub mode: &'static str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub annulus_hole: Option<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub inner_radius: Option<f64>,
-    pub pole_uv: [f64; 2],
-    pub pole_3d: [f64; 3],
-    pub e_min: f64,
-    pub e_min_centroid: f64,
-    pub uniformity: f64,
-    pub evaluations: usize,
-    /// Poles `auto` or `centroid` chose first and could not plan from (see [`MAX_FALLBACKS`]).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub rejected: Vec<RejectedPole>,
-}
-
-/// Where a peak of the verified finish lies: the verifier's sample ([`verify::ScallopAt`]), its
-/// slit-domain image w = ρ·e^{iθ} and the rings either side of it.
-#[derive(Debug, Clone, Serialize)]
-pub struct PeakAt {
-    #[serde(flatten)]
-    pub sample: verify::ScallopAt,
-    /// |w| and arg w of the sample's image.
-    pub rho: f64,
-    pub theta: f64,
-    /// The ring outside the sample (larger radius) and the one inside it, indices into
-    /// `ring_radii` (`None` beyond the first or the last ring).
-    pub ring_outside: Option<usize>,
-    pub ring_inside: Option<usize>,
-}
-
-impl PeakAt {
-    /// The peak `at` located on `surface` (the map's vertices) in `map` between `radii`
-    /// (outermost first); `None` when its face is not the surface's.
-    pub fn locate(at: &verify::ScallopAt, surface: &Surface, map: &SlitMap, radii: &[f64]) -> Option<Self> {
-        let [a, b, c] = *surface.triangles.get(at.face as usize)?;
-        let corner = |v: u32| surface.positions.get(v as usize).copied();
-        let (pa, pb, pc) = (corner(a)?, corner(b)?, corner(c)?);
-        let w = |v: u32| map.w.get(v as usize).copied();
-        let (wa, wb, wc) = (w(a)?, w(b)?, w(c)?);
-        // The sample lies on the face: its barycentric coordinates are its closest point's.
-        let [ba, bb, bc] = crate::mesh::nearest::closest_on_triangle(DVec3::from_array(at.position), pa, pb, pc);
-        let image = wa * ba + wb * bb + wc * bc;
-        let rho = image.length();
-        let inside = radii.iter().position(|&r| r <= rho);
-        let outside = match inside {
-            Some(0) => None,
-            Some(k) => Some(k - 1),
-            None => radii.len().checked_sub(1),
-        };
-        Some(Self { sample: *at, rho, theta: image.y.atan2(image.x), ring_outside: outside, ring_inside: inside })
-    }
-}
-
-/// The plan report (`slitpath plan --report`, and what the page shows).
-#[derive(Debug, Clone, Serialize)]
-pub struct PlanReport {
-    pub options: OptionsReport,
-    pub mesh: MeshReport,
-    /// The flattening's method, disk blend, hole fillings and quality figures.
-    pub flatten: FlattenReport,
-    pub origin: OriginReport,
-    /// Number of rings.
-    pub rings: usize,
-    /// Ring radii |w|, outermost first.
-    pub ring_radii: Vec<f64>,
-    /// Rings the spacing could not prove everywhere (see [`Rings::fold_compromises`],
-    /// [`Rings::crease_compromises`] and [`Rings::gate_compromises`]): where the verifier's
-    /// figures may exceed h, and why.
-    pub fold_compromises: usize,
-    pub crease_compromises: usize,
-    pub gate_compromises: usize,
-    /// Seed 003's optimisation of the field (absent with `--optimise none`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub optimise: Option<OptimiseSummary>,
-    pub path: PathSummary,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub verify: Option<Verification>,
-    /// Where the verifier's largest scallop lies in the slit domain and between which rings
-    /// (absent without verification).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_scallop_at: Option<PeakAt>,
-    /// The same for its largest scallop outside the facet valleys.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_outside_valleys_at: Option<PeakAt>,
-    pub gouge_risk_area_mm2: f64,
-    pub flipped_triangles: usize,
-    /// With [`Facets::Exact`]: the concave creases where the STL's facets alone leave more than
-    /// h for this R, whatever the path ([`crate::mesh::creases`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub facet_valleys: Option<FacetValleys>,
-    /// What the user should know before trusting the G-code, in words (the CLI prints them on
-    /// stderr, the page beside the figures).
-    pub warnings: Vec<String>,
-    pub timings_ms: Timings,
-}
-
-impl PlanReport {
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        planner: &Planner,
-        options: &PlanOptions,
-        origin: &Origin,
-        map: &SlitMap,
-        rings: &Rings,
-        path: PathSummary,
-        verification: Option<Verification>,
-        timings_ms: Timings,
-    ) -> Self {
-        let (mode, annulus_hole, inner_radius) = match map.mode {
-            Mode::Disk => ("disk", None, None),
-            Mode::Annulus { hole, inner_radius } => ("annulus", Some(hole), Some(inner_radius)),
-        };
-        let mut report = Self {
-            options: OptionsReport::new(options),
-            mesh: planner.report.clone(),
-            flatten: planner.flattening.report(),
-            origin: OriginReport {
-                mode,
-                annulus_hole,
-                inner_radius,
-                pole_uv: origin.pole.to_array(),
-                pole_3d: origin.pole_3d.to_array(),
-                e_min: origin.energy.e_min,
-                e_min_centroid: origin.centroid_energy.e_min,
-                uniformity: origin.energy.uniformity,
-                evaluations: origin.evaluations,
-                rejected: Vec::new(),
-            },
-            rings: rings.rings.len(),
-            ring_radii: rings.radii(),
-            fold_compromises: rings.fold_compromises,
-            crease_compromises: rings.crease_compromises,
-            gate_compromises: rings.gate_compromises,
-            optimise: None,
-            path,
-            max_scallop_at: None,
-            max_outside_valleys_at: None,
-            verify: verification,
-            gouge_risk_area_mm2: origin.energy.gouge_risk_area_mm2,
-            flipped_triangles: map.flipped_triangles(),
-            facet_valleys: None,
-            warnings: Vec::new(),
-            timings_ms,
-        };
-        if options.facets == Facets::Exact {
-            let (r, h) = (options.radius_mm, options.scallop_mm);
-            let valleys = crate::mesh::creases::facet_valleys(&planner.surface, r, h);
-            if valleys.edges > 0 || valleys.pits > 0 {
-                report.warnings.push(format!(
-                    "the STL's facets alone leave up to {:.4} mm ({:.2} h) at {} concave creases ({:.1} mm of edges) and {} pits for a ball of radius {r} mm, whatever the path: if the STL tessellates a smooth surface, plan with --facets smooth; otherwise use a finer STL or a smaller ball (a smaller h would not help)",
-                    valleys.max_depth_mm,
-                    valleys.max_depth_mm / h,
-                    valleys.edges,
-                    valleys.length_mm,
-                    valleys.pits
-                ));
-            }
-            report.facet_valleys = Some(valleys);
-        }
-        let radii = rings.radii();
-        let locate = |at: Option<&verify::ScallopAt>| at.and_then(|a| PeakAt::locate(a, &planner.surface, map, &radii));
-        report.max_scallop_at = locate(report.verify.as_ref().and_then(|v| v.max_scallop_at.as_ref()));
-        report.max_outside_valleys_at = locate(report.verify.as_ref().and_then(|v| v.max_outside_valleys_at.as_ref()));
-        report
-    }
-}
-
-/// Header lines of the G-code: options and path figures, no timings (deterministic output).
-fn header_lines(
-    o: &PlanOptions,
-    origin: &Origin,
-    rings: &Rings,
-    path: &PathSummary,
-    optimised: bool,
-) -> Vec<(String, String)> {
-    let opts = OptionsReport::new(o);
-    let field = if optimised {
-        format!("seed 003 optimised, tpsfo, alpha {}", o.alpha)
-    } else {
-        "conformal slit map, seed 000".to_string()
-    };
-    let mut lines = vec![
-        ("planner".to_string(), "slitpath conformal slit-map spiral".to_string()),
-        ("field".into(), field),
-        ("ball radius mm".into(), format!("{}", opts.radius_mm)),
-        ("scallop mm".into(), format!("{}", opts.scallop_mm)),
-        ("origin".into(), opts.origin),
-        ("axes".into(), format!("{}", opts.axes)),
-    ];
-    if let (Some(l), Some(t)) = (opts.lead_deg, opts.tilt_deg) {
-        lines.push(("lead tilt deg".into(), format!("{l} {t}")));
-    }
-    lines.extend([
-        ("direction".into(), format!("{:?} {:?}", opts.direction, opts.cut).to_lowercase()),
-        ("pole uv".into(), format!("{:.6} {:.6}", origin.pole.x, origin.pole.y)),
-        ("rings".into(), format!("{}", rings.rings.len())),
-        ("path length mm".into(), format!("{:.3}", path.length_mm)),
-        ("points".into(), format!("{}", path.points)),
-        ("estimated time min".into(), format!("{:.2}", path.time_min)),
-    ]);
-    lines
-}
