@@ -19,16 +19,20 @@ function rows(plan: PlanResult, limit: number): Row[] {
   const optimise = report.optimise;
   const retry = report.spacing_retries?.at(-1);
   return [
-    [
-      "metric-rings",
-      "Rings",
-      n0.format(plan.ringRadii.length) +
-        (retry === undefined
-          ? ""
-          : ` — the first path left ${n3.format(retry.max_over_h)} h; spaced again for ${n3.format(retry.retry_target_fraction)} h` +
-            (retry.kept ? "" : ", not kept")),
-      retry !== undefined && !retry.kept,
-    ],
+    ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
+    // Only when the first path's own verification left more than h (src/plan/paths.rs).
+    ...(retry === undefined
+      ? []
+      : [
+          [
+            "metric-spacing-retry",
+            "Rings spaced again",
+            `the first path left ${n3.format(retry.max_over_h)} h; spaced for ${n3.format(retry.retry_target_fraction)} h` +
+              (retry.retry_max_over_h === null ? `: ${retry.error ?? "failed"}` : `: ${n3.format(retry.retry_max_over_h)} h`) +
+              (retry.kept ? "" : ", not kept"),
+            !retry.kept,
+          ] satisfies Row,
+        ]),
     ["metric-length", "Path length", `${n1.format(path.length_mm)} mm (${n0.format(path.points)} points)`],
     // The flat-plate bound area / (2·√(2Rh)): evenly spaced passes on a gently curved part come
     // to about 1.05.
