@@ -5,7 +5,8 @@
 // its clock through Date.now; here that returns the process's CPU time, so a machine shared with
 // other work does not inflate the figures as it inflates the page benchmark's wall times. The
 // first plan includes V8's compilation of the module (its background threads count): compare the
-// later ones. Figures only; see docs/benchmarks.md for the native counterpart.
+// later ones. After each plan it prints the wasm memory, which never shrinks: the peak so far.
+// Figures only; see docs/benchmarks.md for the native counterpart.
 import { readFileSync } from "node:fs";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
@@ -17,7 +18,7 @@ if (!file) {
 }
 const pkg = join(dirname(fileURLToPath(import.meta.url)), "../www/pkg");
 const core = await import(join(pkg, "slitpath.js"));
-core.initSync({ module: readFileSync(join(pkg, "slitpath_bg.wasm")) });
+const wasm = core.initSync({ module: readFileSync(join(pkg, "slitpath_bg.wasm")) });
 Date.now = () => {
   const { user, system } = process.cpuUsage();
   return (user + system) / 1000;
@@ -28,6 +29,7 @@ for (let k = 0; k < Number(plans); k++) {
   planner.prepare(undefined);
   const report = planner.plan({ radiusMm: Number(radius), scallopMm: Number(scallop) }, undefined);
   const stages = Object.entries(report.timings_ms).map(([stage, ms]) => `${stage} ${Math.round(ms)}`);
-  console.log(`plan ${k + 1}: ${stages.join(", ")}`);
+  const memory = (wasm.memory.buffer.byteLength / 2 ** 20).toFixed(0);
+  console.log(`plan ${k + 1}: ${stages.join(", ")}; wasm memory ${memory} MiB`);
   planner.free();
 }
