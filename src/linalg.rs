@@ -155,6 +155,9 @@ fn assemble_lower(n: usize, triplets: &[(usize, usize, f64)]) -> Result<LowerCsc
         }
         col_ptr[c + 1] = row_idx.len() as u32;
     }
+    // The analysis keeps the pattern: without the room of the duplicates (over half of it for a
+    // cotan Laplacian's triplets).
+    row_idx.shrink_to_fit();
     Ok(LowerCsc { col_ptr, row_idx, values })
 }
 
@@ -538,6 +541,44 @@ impl SparseCholesky {
     ) -> Result<Self, LinalgError> {
         let triplets = cotan_laplacian_triplets(weights, Some(unknown));
         Self::with_order(n, &triplets, &restrict_order(vertex_order, unknown, n))
+    }
+
+    /// The symbolic analysis (AMD's order, or `order` as in [`SparseCholesky::with_order`]) of the
+    /// symmetric pattern of the `(i, j)` pairs (either triangle, repeats allowed), without a
+    /// numeric factorisation: solves give NaN until [`SparseCholesky::refactor_lower`] succeeds.
+    /// For a caller that refactorises at once: its pattern, 8 bytes a pair, is freed before the
+    /// factor is allocated (triplets and their assembly held 250 MB beside the 300k-face panel's
+    /// optimise factor, and left a hole just short of it in the page's memory).
+    pub fn analyse(n: usize, mut pairs: Vec<(u32, u32)>, order: Option<&[u32]>) -> Result<Self, LinalgError> {
+        if n == 0 {
+            return Err(LinalgError::Empty);
+        }
+        if n >= u32::MAX as usize {
+            return Err(LinalgError::TooLarge { what: "the number of rows" });
+        }
+        for p in pairs.iter_mut() {
+            if p.0 as usize >= n || p.1 as usize >= n {
+                return Err(LinalgError::BadIndex { row: p.0 as usize, col: p.1 as usize, n });
+            }
+            // (column, row) of the lower triangle: sorted, they are the CSC order.
+            *p = (p.0.min(p.1), p.0.max(p.1));
+        }
+        crate::par::sort_unstable(&mut pairs);
+        pairs.dedup();
+        if pairs.len() >= u32::MAX as usize {
+            return Err(LinalgError::TooLarge { what: "the number of stored entries" });
+        }
+        let mut col_ptr = vec![0u32; n + 1];
+        for &(c, _) in &pairs {
+            col_ptr[c as usize + 1] += 1;
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx = pairs.iter().map(|&(_, r)| r).collect();
+        drop(pairs);
+        let symbolic = Arc::new(Symbolic::new(n, col_ptr, row_idx, order)?);
+        Ok(Self { symbolic, values: Vec::new() })
     }
 
     fn build(n: usize, triplets: &[(usize, usize, f64)], order: Option<&[u32]>) -> Result<Self, LinalgError> {
@@ -1007,6 +1048,32 @@ mod tests {
         if !had_entry {
             assert!(matches!(chol.refactor(&trip3), Err(LinalgError::PatternMismatch { .. })));
         }
+    }
+
+    #[test]
+    fn an_analysed_pattern_refactorises_to_the_same_factor() {
+        let mut rng = SplitMix(11);
+        let n = 30;
+        let (_, trip) = random_spd(n, &mut rng);
+        let chol = SparseCholesky::new(n, &trip).unwrap();
+        // Both triangles, repeated: the pattern is the same.
+        let pairs: Vec<(u32, u32)> = trip.iter().map(|&(r, c, _)| (r as u32, c as u32)).collect();
+        let mut analysed = SparseCholesky::analyse(n, pairs, None).unwrap();
+        assert_eq!((analysed.order(), analysed.lower_len()), (chol.order(), chol.lower_len()));
+        let mut x = vec![1.0; n];
+        analysed.solve_in_place(&mut x);
+        assert!(x.iter().all(|v| v.is_nan()), "no factor yet");
+        let mut values = vec![0.0; analysed.lower_len()];
+        for &(r, c, v) in trip.iter().filter(|t| t.0 >= t.1) {
+            values[analysed.lower_slot(r, c).unwrap()] += v;
+        }
+        analysed.refactor_lower(&values).unwrap();
+        assert_eq!(analysed.values, chol.values);
+        assert_eq!(
+            SparseCholesky::analyse(2, vec![(0, 2)], None).unwrap_err(),
+            LinalgError::BadIndex { row: 0, col: 2, n: 2 }
+        );
+        assert_eq!(SparseCholesky::analyse(0, Vec::new(), None).unwrap_err(), LinalgError::Empty);
     }
 
     #[test]

@@ -116,7 +116,8 @@ struct NewtonSystem {
     /// Per entry of the faces' 3×3 blocks (row-major), its lower slot, or [`NONE`] for the
     /// upper triangle and fixed vertices (the lower mirror carries the value).
     block_slots: Vec<u32>,
-    /// Per value of [`EnergyModel::smoothness_gauss_newton_at`], likewise.
+    /// Per value of [`EnergyModel::smoothness_gauss_newton_at`]'s terms (in the order of
+    /// [`EnergyModel::smoothness_pattern`]), likewise.
     smooth_slots: Vec<u32>,
     /// The diagonals of the unknowns no face touches (vertices of the skipped pole face only):
     /// a unit there makes their direction −g = 0.
@@ -133,52 +134,47 @@ impl NewtonSystem {
         field: &Field,
         r: &[f64],
         blocks: &Blocks,
-        smooth: &[f64],
+        smooth: &Smooth,
     ) -> Result<Self, OptimiseError> {
         let unknown = |v: u32| field.unknown[v as usize];
-        let pattern = model.smoothness_pattern();
-        // The pattern is analysed with the entries at zero and a unit diagonal (always
-        // factorisable); the values follow through `refactor`, which shifts the diagonal when
-        // they are not positive definite.
-        let mut entries = Vec::with_capacity(blocks.len() * 9 + smooth.len() + field.n_unknowns);
-        for (a, b) in &pattern {
-            if let (Some(ua), Some(ub)) = (unknown(*a), unknown(*b)) {
-                entries.push((ua, ub, 0.0));
-            }
-        }
+        let corner_pairs = |&(c, _): &([u32; 3], _)| (0..9).map(move |e| (c[e / 3], c[e % 3]));
         let mut touched = vec![false; field.n_unknowns];
         for (corners, _) in blocks {
-            for i in 0..3 {
-                let Some(ui) = unknown(corners[i]) else { continue };
-                touched[ui] = true;
-                for &cj in corners {
-                    if let Some(uj) = unknown(cj) {
-                        entries.push((ui, uj, 0.0));
-                    }
+            for &c in corners {
+                if let Some(u) = unknown(c) {
+                    touched[u] = true;
                 }
             }
         }
         let untouched: Vec<usize> = (0..field.n_unknowns).filter(|&k| !touched[k]).collect();
-        entries.extend((0..field.n_unknowns).map(|k| (k, k, 1.0)));
-        let pattern_only = entries;
-        // E_g couples each vertex's star: its own AMD order then (the mesh's otherwise).
-        let chol = if model.couples_stars() {
-            SparseCholesky::new(field.n_unknowns, &pattern_only)?
-        } else {
-            let order = mesh_order(r.len(), field.triangles())?;
-            let order = restrict_order(&order, &field.unknown, field.n_unknowns);
-            SparseCholesky::with_order(field.n_unknowns, &pattern_only, &order)?
+        // The pattern's lower triangle and every diagonal, analysed without a factorisation (the
+        // values follow through `refactor`), so that these pairs are freed before the factor is
+        // allocated.
+        let lower = |(a, b): (u32, u32)| match (unknown(a), unknown(b)) {
+            (Some(ua), Some(ub)) if ua >= ub => Some((ua as u32, ub as u32)),
+            _ => None,
         };
+        let pairs = || {
+            let faces = blocks.iter().flat_map(corner_pairs);
+            let diagonal = (0..field.n_unknowns as u32).map(|k| (k, k));
+            model.smoothness_pattern().chain(faces).filter_map(lower).chain(diagonal)
+        };
+        let mut pattern = Vec::with_capacity(pairs().count());
+        pattern.extend(pairs());
+        // E_g couples each vertex's star: its own AMD order then (the mesh's otherwise).
+        let order = match model.couples_stars() {
+            true => None,
+            false => Some(restrict_order(&mesh_order(r.len(), field.triangles())?, &field.unknown, field.n_unknowns)),
+        };
+        let chol = SparseCholesky::analyse(field.n_unknowns, pattern, order.as_deref())?;
         let slot = |a: Option<usize>, b: Option<usize>| match (a, b) {
             (Some(a), Some(b)) if a >= b => chol.lower_slot(a, b).map_or(NONE, |s| s as u32),
             _ => NONE,
         };
-        let block_slots = blocks
-            .iter()
-            .flat_map(|(c, _)| (0..9).map(move |e| (c[e / 3], c[e % 3])))
-            .map(|(a, b)| slot(unknown(a), unknown(b)))
-            .collect();
-        let smooth_slots = pattern.iter().map(|&(a, b)| slot(unknown(a), unknown(b))).collect();
+        let mut block_slots = Vec::with_capacity(blocks.len() * 9);
+        block_slots.extend(blocks.iter().flat_map(corner_pairs).map(|(a, b)| slot(unknown(a), unknown(b))));
+        let mut smooth_slots = Vec::with_capacity(smooth.iter().map(|(_, d)| d.len() * d.len()).sum());
+        smooth_slots.extend(model.smoothness_pattern().map(|(a, b)| slot(unknown(a), unknown(b))));
         let unit_slots = untouched.iter().map(|&k| slot(Some(k), Some(k))).collect();
         let diagonal_slots = (0..field.n_unknowns).map(|k| slot(Some(k), Some(k))).collect();
         let mut system = Self { chol, block_slots, smooth_slots, unit_slots, diagonal_slots };
@@ -186,7 +182,7 @@ impl NewtonSystem {
         Ok(system)
     }
 
-    fn refactor(&mut self, blocks: &Blocks, smooth: &[f64]) -> Result<(), OptimiseError> {
+    fn refactor(&mut self, blocks: &Blocks, smooth: &Smooth) -> Result<(), OptimiseError> {
         let mut values = vec![0.0; self.chol.lower_len()];
         for ((_, block), slots) in blocks.iter().zip(self.block_slots.chunks_exact(9)) {
             for (e, &s) in slots.iter().enumerate() {
@@ -195,9 +191,14 @@ impl NewtonSystem {
                 }
             }
         }
-        for (&s, &v) in self.smooth_slots.iter().zip(smooth) {
-            if s != NONE {
-                values[s as usize] += v;
+        let mut smooth_slots = self.smooth_slots.iter();
+        for (w, d) in smooth {
+            for &da in d {
+                for (&db, &s) in d.iter().zip(smooth_slots.by_ref()) {
+                    if s != NONE {
+                        values[s as usize] += w * da * db;
+                    }
+                }
             }
         }
         for &s in &self.unit_slots {
@@ -206,13 +207,20 @@ impl NewtonSystem {
         // Faces whose field is nearly flat (beside a slit tip on a coarse rim) weigh up to
         // 10¹² times the others and the factorisation can lose the last bits of positivity: the
         // diagonal is then raised by a growing fraction of itself (Levenberg–Marquardt).
+        // The shifted copy is made only when a shift is (rarely) needed: it is the size of A.
         let mut shift = 0.0;
+        let mut shifted = Vec::new();
         for _ in 0..SHIFTS {
-            let mut shifted = values.clone();
-            for &s in &self.diagonal_slots {
-                shifted[s as usize] *= 1.0 + shift;
-            }
-            match self.chol.refactor_lower(&shifted) {
+            let attempt = if shift == 0.0 {
+                &values
+            } else {
+                shifted.clone_from(&values);
+                for &s in &self.diagonal_slots {
+                    shifted[s as usize] *= 1.0 + shift;
+                }
+                &shifted
+            };
+            match self.chol.refactor_lower(attempt) {
                 Err(LinalgError::NotPositiveDefinite { .. }) => {
                     shift = if shift == 0.0 { 1e-10 } else { shift * 100.0 }
                 }
@@ -227,6 +235,7 @@ impl NewtonSystem {
 const SHIFTS: usize = 6;
 
 type Blocks = Vec<([u32; 3], [[f64; 3]; 3])>;
+type Smooth = Vec<(f64, Vec<f64>)>;
 
 /// The Gauss–Newton direction −K⁻¹ g on the unknowns at the field `r` (evaluated as `at`; the
 /// system made on the first call).

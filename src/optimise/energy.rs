@@ -485,27 +485,21 @@ impl EnergyModel {
 
     /// The pattern of [`EnergyModel::smoothness_gauss_newton_at`]'s values: (vertex, vertex) pairs,
     /// the same every time.
-    pub(super) fn smoothness_pattern(&self) -> Vec<(u32, u32)> {
-        let mut out = Vec::new();
-        for star in &self.stars {
-            for &a in &star.members {
-                for &b in &star.members {
-                    out.push((a, b));
-                }
-            }
-        }
-        out
+    pub(super) fn smoothness_pattern(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.stars.iter().flat_map(|star| star.members.iter().flat_map(|&a| star.members.iter().map(move |&b| (a, b))))
     }
 
-    /// The Gauss–Newton matrix of α·E_g, its values in the order of
-    /// [`EnergyModel::smoothness_pattern`]: 2α/C_j ∇D_j ∇D_jᵀ per interior vertex j, ∇D_j =
-    /// Σ_F −A_F ∇φ_jᵀ (I − XXᵀ)/|∇T| ∇φ over the faces round j. Each vertex couples its whole star
-    /// (E_g is a fourth-order term): left to the line search, it made the Gauss–Newton steps of
-    /// E_w wrinkle the level sets, and every step was cut to a sixteenth.
+    /// The Gauss–Newton matrix of α·E_g as one rank-one term (w_j, ∇D_j) per star, w_j = 2α/C_j,
+    /// ∇D_j = Σ_F −A_F ∇φ_jᵀ (I − XXᵀ)/|∇T| ∇φ over the faces round j, over the star's members:
+    /// its values, in the order of [`EnergyModel::smoothness_pattern`], are w_j·∂_a D_j·∂_b D_j
+    /// (the caller forms them where it sums them: as one vector they held 60 MB at the 300k-face
+    /// panel's peak). Each vertex couples its whole star (E_g is a fourth-order term): left to
+    /// the line search, it made the Gauss–Newton steps of E_w wrinkle the level sets, and every
+    /// step was cut to a sixteenth.
     /// At the field `at` was evaluated at.
-    pub(super) fn smoothness_gauss_newton_at(&self, at: &Evaluated) -> Vec<f64> {
+    pub(super) fn smoothness_gauss_newton_at(&self, at: &Evaluated) -> Vec<(f64, Vec<f64>)> {
         let at_states = &at.states;
-        let per_star = crate::par::each(self.stars.len(), |i| {
+        crate::par::each(self.stars.len(), |i| {
             let star = &self.stars[i];
             let mut d = vec![0.0; star.members.len()];
             for &(f, k, at) in &star.faces {
@@ -520,16 +514,8 @@ impl EnergyModel {
                     d[at[m] as usize] += pb.dot(face.grad[m]);
                 }
             }
-            let w = 2.0 * self.alpha / self.dual_area[star.vertex as usize];
-            let mut out = Vec::with_capacity(d.len() * d.len());
-            for &da in &d {
-                for &db in &d {
-                    out.push(w * da * db);
-                }
-            }
-            out
-        });
-        per_star.into_iter().flatten().collect()
+            (2.0 * self.alpha / self.dual_area[star.vertex as usize], d)
+        })
     }
 }
 
