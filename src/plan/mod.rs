@@ -399,7 +399,6 @@ impl Planner {
             verification,
             gcode,
             retries,
-            ..
         } = finished;
         let mut report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
         report.origin.rejected = rejected;
