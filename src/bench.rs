@@ -561,14 +561,8 @@ pub fn format_flank(f: &FlankFigures) -> String {
 pub struct SweepFigures {
     pub name: String,
     pub faces: usize,
-    /// The part's R and h, mm (`slitpath plan gen:SEED.stl --radius R --scallop h` plans it).
-    pub radius_mm: f64,
-    pub scallop_mm: f64,
-    /// The field the written path follows (`tpsfo` or `conformal`) and the paths spaced again
-    /// ([`crate::plan::SpacingRetry`]).
-    pub path_field: &'static str,
-    pub spacing_retries: usize,
-    /// The plan's report (`SLITPATH_SWEEP_REPORTS=DIR` writes it).
+    /// The plan's report (`SLITPATH_SWEEP_REPORTS=DIR` writes it): R and h among its options,
+    /// the field the path follows, the spacing's retries.
     #[serde(skip)]
     pub report: crate::plan::PlanReport,
     pub flatten: crate::flatten::FlattenReport,
@@ -657,10 +651,6 @@ pub fn run_sweep(
     let figures = SweepFigures {
         name: part.name.clone(),
         faces,
-        radius_mm: r,
-        scallop_mm: h,
-        path_field: plan.report.optimise.as_ref().map_or("conformal", |o| o.path_field),
-        spacing_retries: plan.report.spacing_retries.len(),
         flatten: planner.flattening.report(),
         max_over_h: v.max_scallop_mm / h,
         max_outside_valleys_over_h: v.max_scallop_outside_valleys_mm / h,
@@ -677,12 +667,13 @@ pub fn run_sweep(
 }
 
 pub fn format_sweep(f: &SweepFigures) -> String {
+    let r = &f.report;
     format!(
         "{:<42} {:>6} R {:.2} h {:.4} {:<10} qc {:.4}/{:<7.3} max {:.3} h (fresh {:.3} h)  facets {:.3} h  length {:.3} ideal {:<9} {} retries  {:>6.0} ms",
         f.name,
         f.faces,
-        f.radius_mm,
-        f.scallop_mm,
+        r.options.radius_mm,
+        r.options.scallop_mm,
         format!("{:?}", f.flatten.method),
         f.flatten.quality.qc_mean,
         f.flatten.quality.qc_max,
@@ -690,8 +681,8 @@ pub fn format_sweep(f: &SweepFigures) -> String {
         f.fresh_max_over_h,
         f.facet_depth_over_h,
         f.length_over_ideal,
-        f.path_field,
-        f.spacing_retries,
+        r.optimise.as_ref().map_or("conformal", |o| o.path_field),
+        r.spacing_retries.len(),
         f.plan_ms
     )
 }

@@ -401,6 +401,14 @@ impl FaceTree {
         Some(ClearBall { centre: c, touch: self.touch(last, c), rounds, unresolved: false })
     }
 
+    /// The ball [`FaceTree::rest_ball`] lets down from face `face` at its point `p`, when it is
+    /// resolved and leaves less over `p` than `ball` (a ball of the same radius over `p`, cleared
+    /// of every facet): the toolpath's and the spacing's swap beside a concave crease.
+    pub fn rest_below(&self, ball: &ClearBall, p: DVec3, face: usize, radius: f64) -> Option<ClearBall> {
+        let rest = self.rest_ball(p, face, radius).filter(|b| !b.unresolved)?;
+        (rest.centre.distance(p) < ball.centre.distance(p)).then_some(rest)
+    }
+
     /// The unit normal of face `face`'s plane (zero for a degenerate face).
     pub fn face_normal(&self, face: usize) -> DVec3 {
         self.planes[self.slot_of[face] as usize].0

@@ -147,9 +147,9 @@ impl NewtonSystem {
             }
         }
         let untouched: Vec<usize> = (0..field.n_unknowns).filter(|&k| !touched[k]).collect();
-        // The pattern's lower triangle and every diagonal, analysed without a factorisation (the
-        // values follow through `refactor`), so that these pairs are freed before the factor is
-        // allocated.
+        // The pattern's lower triangle and every diagonal (counted first, so that the vector
+        // holds no spare room), analysed without a factorisation (the values follow through
+        // `refactor`), so that these pairs are freed before the factor is allocated.
         let lower = |(a, b): (u32, u32)| match (unknown(a), unknown(b)) {
             (Some(ua), Some(ub)) if ua >= ub => Some((ua as u32, ub as u32)),
             _ => None,

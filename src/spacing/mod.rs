@@ -1016,8 +1016,7 @@ impl<'a> Spacer<'a> {
         let ball = faces.clear_ball(start, l.n, self.ball, Some(l.face as usize), true);
         let over = |c: DVec3| c.distance(l.p) - self.ball;
         if ball.rounds > 0 && over(ball.centre) > rest_above_mm(h) {
-            let rest = faces.rest_ball(l.p, l.face as usize, self.ball).filter(|b| !b.unresolved);
-            if let Some(rest) = rest.filter(|b| over(b.centre) < over(ball.centre)) {
+            if let Some(rest) = faces.rest_below(&ball, l.p, l.face as usize, self.ball) {
                 let to = rest.centre - l.p;
                 return (to / to.length(), planned_lift_mm(over(rest.centre), h));
             }

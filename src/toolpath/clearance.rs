@@ -191,26 +191,24 @@ fn clear_one(
     // Lifted more than the spacing plans for: the ball touching the contact's own facet at p,
     // let down into the crease beside it, when that leaves less over p.
     let over = |c: DVec3| c.distance(p) - kept.keep_mm();
+    let mut resting_normal = None;
     if let Some(f) = face.filter(|_| over(ball.centre) > rest_above_mm) {
         if !search {
             // Compared as the spacing compares them: with the ball cleared of every facet.
             ball = faces.clear_ball(start, n, kept.keep_mm(), face, true);
         }
-        if let Some(rest) = faces.rest_ball(p, f, kept.keep_mm()).filter(|b| !b.unresolved) {
-            if over(rest.centre) < over(ball.centre) {
-                let m = faces.face_normal(f);
-                ball = rest;
-                if ball.rounds == 0 {
-                    report.moved += 1;
-                    report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
-                    return (p, m);
-                }
-            }
+        if let Some(rest) = faces.rest_below(&ball, p, f, kept.keep_mm()) {
+            // Clear where it touches its facet: the contact is p itself.
+            resting_normal = (rest.rounds == 0).then(|| faces.face_normal(f));
+            ball = rest;
         }
     }
     report.unresolved += ball.unresolved as usize;
     report.moved += 1;
     report.max_move_mm = report.max_move_mm.max(ball.centre.distance(start));
+    if let Some(m) = resting_normal {
+        return (p, m);
+    }
     // The centre stays exactly where it cleared every facet; the contact is R below it towards
     // the touch point (on the surface but for a Newton step's overshoot where the ball rests on
     // an edge: renormalising onto the touch point instead pulled such centres back into

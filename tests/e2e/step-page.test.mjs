@@ -1,13 +1,13 @@
 // End-to-end tests of STEP input on the page (issue 36) in Debian's headless Chromium: the
 // bundled STEP sample (seed 004's blade band) read in the worker, its faces listed and drawn,
-// planned with the Coons band spiral (its scallop heat map on the faces); a face clicked in the 3D view leaves the band (a typed
-// error with the way out) and clicked again closes it; the download is byte-identical to
-// `slitpath coons`; a garbled STEP file gives an error naming the entity and the page goes on;
-// the ball-end spiral refuses the band's walls (undercuts for a 3-axis tool) and plans a block of
-// faces picked from a grid of B-spline faces, the same program as `slitpath plan --faces`; a
-// closed solid opened without a selection plans on its top face; the flank strategy on two
-// faces of a B-spline cylinder band (the file read once, when opened), the same program as
-// `slitpath flank --faces`.
+// planned with the Coons band spiral (its scallop heat map on the faces); a face clicked in the
+// 3D view leaves the band (a typed error with the way out) and clicked again closes it; the
+// download is byte-identical to `slitpath coons`; a garbled STEP file gives an error naming the
+// entity and the page goes on; the ball-end spiral refuses the band's walls (undercuts for a
+// 3-axis tool) and plans a block of faces picked from a grid of B-spline faces, the same program
+// as `slitpath plan --faces`; a closed solid opened without a selection plans on its top face;
+// the flank strategy on two faces of a B-spline cylinder band (the file read once, when opened),
+// the same program as `slitpath flank --faces`.
 // The tests share one page and run in order.
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";

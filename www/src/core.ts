@@ -319,12 +319,12 @@ export class Part {
     return this.planner.report() as MeshReport;
   }
 
-  /** STEP input: the faces the part is made of (the selection, or the top of a solid opened without one); `null` for an STL. */
   /** The scallop under a Coons plan's path at each vertex of this part's surface (its heat map). */
   coonsScallop(plan: CoreCoonsPlan): Float64Array {
     return plan.vertexScallopOn(this.planner);
   }
 
+  /** STEP input: the faces the part is made of (the selection, or the top of a solid opened without one); `null` for an STL. */
   stepFaces(): number[] | null {
     const ids = this.planner.stepFaceIds();
     return ids ? Array.from(ids) : null;
