@@ -11,7 +11,7 @@
 //! its S^h point lies within R of the ball-centre polyline of one of the two rings, so a gap the
 //! meridians missed is found wherever it is (stop 18 measured such gaps at up to 1.3 h on the
 //! shared meshes). With exact facets the polylines' centres are
-//! moved out by the lift the spacing plans for each ball (see `Spacer::lift_mm`).
+//! moved out by the lift the spacing plans for each ball (see `cleared_lift_mm`).
 //!
 //! Points at fixed steps pass under the band's cusp, a V a few hundredths of a millimetre wide at
 //! its top: on every edge crossing the band and on lines arg w = const across each of its faces

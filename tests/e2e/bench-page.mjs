@@ -39,7 +39,9 @@ function native(file, scallop) {
 
 /**
  * Frames the views draw per second while the scrub bar moves on every animation frame of the page
- * for 2 s (each frame a new tool position), and while the pointer sweeps the 2D view.
+ * for 2 s (each frame a new tool position), and while the pointer sweeps the 2D view. The sweep
+ * is as fast as the driver delivers moves (each \`mouse.move\` is a round trip), so the moves per
+ * second are printed beside the frames: a view that keeps up draws one frame per move.
  */
 async function interaction(page) {
   const frames = () => page.evaluate(() => Number(document.querySelector("[data-testid=view-3d]").dataset.frame));
@@ -60,13 +62,15 @@ async function interaction(page) {
   const box = await page.getByTestId("view-2d").boundingBox();
   before = await frames();
   const start = Date.now();
-  for (let i = 0; Date.now() - start < 2000; i++) {
+  let moves = 0;
+  for (let i = 0; Date.now() - start < 2000; i++, moves++) {
     const t = (i % 200) / 200;
     await page.mouse.move(box.x + box.width * (0.1 + 0.8 * t), box.y + box.height * (0.3 + 0.4 * Math.sin(7 * t) ** 2));
   }
   await page.waitForTimeout(200);
-  const hoverFps = ((await frames()) - before) / ((Date.now() - start - 200) / 1000);
-  return { scrubFps, hoverFps };
+  const seconds = (Date.now() - start - 200) / 1000;
+  const hoverFps = ((await frames()) - before) / seconds;
+  return { scrubFps, hoverFps, hoverMoves: moves / seconds };
 }
 
 /** Ten re-plans (h alternating by 5 %): the page's JS heap after a GC, and the planner's memory, after each. */
@@ -125,13 +129,13 @@ try {
 
 const f = (v, digits = 0) => (v === null || v === undefined || Number.isNaN(v) ? "—" : v.toFixed(digits));
 console.log("page benchmark, headless Chromium (R 3 mm; times in s, memory MiB)");
-console.log("case          faces      h  choice→loaded  →planned  planner  long tasks (n, sum, max)   wasm MiB   frames/s scrub, hover");
+console.log("case          faces      h  choice→loaded  →planned  planner  long tasks (n, sum, max)   wasm MiB   frames/s scrub, hover (pointer moves/s)");
 for (const r of rows) {
   const s = (ms) => (ms === null || ms === undefined ? null : ms / 1000);
   console.log(
     `${r.name.padEnd(12)} ${String(r.faces).padStart(6)}  ${r.scallop.toFixed(3)}  ${f(s(r.chosenToLoadedMs), 2).padStart(13)}  ${f(s(r.chosenToPlannedMs), 2).padStart(8)}  ${f(s(r.plannerMs), 2).padStart(7)}  ${String(
       r.longTasks,
-    ).padStart(5)} ${f(r.longTaskSumMs / 1000, 2).padStart(7)} ${f(r.longTaskMaxMs / 1000, 3).padStart(8)}   ${f(r.wasmMiB).padStart(8)}   ${f(r.scrubFps).padStart(8)} ${f(r.hoverFps).padStart(6)}${r.failed ? `  (${r.failed})` : ""}`,
+    ).padStart(5)} ${f(r.longTaskSumMs / 1000, 2).padStart(7)} ${f(r.longTaskMaxMs / 1000, 3).padStart(8)}   ${f(r.wasmMiB).padStart(8)}   ${f(r.scrubFps).padStart(8)} ${f(r.hoverFps).padStart(6)} (${f(r.hoverMoves)})${r.failed ? `  (${r.failed})` : ""}`,
   );
 }
 console.log("\nplanner stages, wasm in the page / native CLI on one thread, same part and options, this run (ms)");
