@@ -277,3 +277,34 @@ fn bad_input_gives_typed_errors() {
     let msg = run(ToolpathOptions { radius_mm: -3.0, ..d() }).to_string();
     assert!(msg.contains("radius_mm") && msg.contains("-3"), "{msg}");
 }
+
+/// camelhead (R 0.05 mm, 5 axes) failed with "the ball centre … repeats the previous one": two
+/// centres 1e-7 mm apart shared a tip. With the axis along the normal (no lead, no tilt) a ball
+/// rolling over a vertex keeps its tip on the vertex while its axis turns: a move in place, which
+/// the toolpath keeps; the lead-in and lead-out still have their directions.
+#[test]
+fn camelhead_five_axis_a_ball_turning_about_its_tip_is_a_move_in_place() {
+    let path = cap();
+    let (mut cc, n) = (path.cc.clone(), &path.normals[..]);
+    for k in [1, 4, cc.len() - 1] {
+        cc[k] = cc[k - 1];
+        assert_ne!(n[k], n[k - 1]);
+    }
+    let tp = toolpath(&cc, n, &five(0.0, 0.0)).expect("a 5-axis turn in place plans");
+    let moves = tp.contact_moves();
+    assert_eq!(moves.len(), cc.len());
+    for k in [1, 4, cc.len() - 1] {
+        assert!(moves[k].tip.distance(moves[k - 1].tip) < 1e-9, "move {k} keeps its tip");
+        assert!(moves[k].axis.angle_between(moves[k - 1].axis) > 1e-4, "move {k} turns the axis");
+    }
+    assert!(tp.moves.iter().all(|m| m.tip.is_finite() && m.axis.is_finite()));
+    // The leads follow the tip's first and last moves, not the turns in place.
+    let first = tp.first_contact;
+    let into = (tp.moves[first].tip - tp.moves[first - 1].tip).normalize();
+    let along = (moves[2].tip - moves[0].tip).normalize();
+    assert!(into.dot(along) > 0.9, "lead-in ends along the first tip move: {into} vs {along}");
+    // Repeated centres are still refused.
+    let mut rep_n = n.to_vec();
+    rep_n[1] = rep_n[0];
+    assert!(matches!(toolpath(&cc, &rep_n, &five(0.0, 0.0)), Err(ToolpathError::RepeatedPoint { index: 1, .. })));
+}

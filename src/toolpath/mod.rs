@@ -277,18 +277,21 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
     check_steps(&centres)?;
     let axes = tool_axes(&centres, &n, &o)?;
     let tips: Vec<DVec3> = centres.iter().zip(&axes).map(|(&c, &a)| c - o.radius * a).collect();
-    for i in 1..tips.len() {
-        let distance = tips[i].distance(tips[i - 1]);
-        if !(distance >= MIN_STEP_MM) {
-            return Err(ToolpathError::RepeatedPoint { index: i, distance });
-        }
-    }
 
-    // Lead-in (from its start down to the first tip) and lead-out (after the last tip).
+    // Lead-in (from its start down to the first tip) and lead-out (after the last tip), along
+    // the first and the last move of the tip. Two centres apart may share a tip with 5 axes: the
+    // axis turns about the tip (camelhead, R 0.05 mm: two tips 2.5e-8 mm apart), a move the
+    // machine makes in place; it only gives the leads no direction.
     let last = tips.len() - 1;
+    let moved = |i: usize, j: usize| tips[i].distance(tips[j]) >= MIN_STEP_MM;
+    let (Some(first_move), Some(last_move)) =
+        ((1..=last).find(|&i| moved(i, 0)), (0..last).rev().find(|&i| moved(i, last)))
+    else {
+        return Err(ToolpathError::RepeatedPoint { index: 1, distance: tips[1].distance(tips[0]) });
+    };
     let rho = o.lead_in / FRAC_PI_2;
-    let lead_in = quarter_circle(tips[0], tips[1] - tips[0], o.up, rho, Lead::In);
-    let lead_out = quarter_circle(tips[last], tips[last] - tips[last - 1], o.up, rho, Lead::Out);
+    let lead_in = quarter_circle(tips[0], tips[first_move] - tips[0], o.up, rho, Lead::In);
+    let lead_out = quarter_circle(tips[last], tips[last] - tips[last_move], o.up, rho, Lead::Out);
 
     // Safe height: above every point the tool reaches (contacts, tips, leads).
     let height = |p: DVec3| p.dot(o.up);
