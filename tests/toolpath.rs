@@ -303,6 +303,9 @@ fn camelhead_five_axis_a_ball_turning_about_its_tip_is_a_move_in_place() {
     let into = (tp.moves[first].tip - tp.moves[first - 1].tip).normalize();
     let along = (moves[2].tip - moves[0].tip).normalize();
     assert!(into.dot(along) > 0.9, "lead-in ends along the first tip move: {into} vs {along}");
+    // A path whose tip never moves has no lead direction.
+    let still = vec![cc[0]; 3];
+    assert_eq!(toolpath(&still, &n[..3], &five(0.0, 0.0)), Err(ToolpathError::TipNeverMoves { points: 3 }));
     // Repeated centres are still refused.
     let mut rep_n = n.to_vec();
     rep_n[1] = rep_n[0];

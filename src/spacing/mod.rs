@@ -30,7 +30,8 @@
 //! the facets, along the interpolated normal: where that normal is tilted from the facet's, the
 //! ball rides higher than the rings were spaced for, and the scallop beside it rises by as much.
 //! The rings' ball centres are then moved out by that much (within bounds, see `planned_lift_mm`)
-//! before the band between them is tested.
+//! before the band between them is tested; balls touching a face certified free
+//! (`face_lifts_free`, most faces of a smooth part) keep the offset's centre without the search.
 //!
 //! The first ring cuts the band up to the outer boundary (|w| = 1) by itself. The last one: in
 //! disk mode the band around the pole is closed by the ball at the pole (the spiral ends there);
@@ -338,10 +339,10 @@ const GATE_SAG: f64 = 0.02;
 /// same as without them), but some of its facets lift a ball by more, so its rings' centres are
 /// still cleared (2.4 million clearances per plan: docs/benchmarks.md).
 const LIFT_FREE: f64 = 0.03;
-/// A face's balls are certified free ([`Spacer::free_face`]) when its own tilt and its sampled
+/// A face's balls are certified free ([`face_lifts_free`]) when its own tilt and its sampled
 /// balls lift them by at most this fraction of the free lift.
 const FREE_SAMPLED: f64 = 0.5;
-/// Where [`Spacer::free_face`] clears a face's balls: its corners, edge midpoints and centroid.
+/// Where [`face_lifts_free`] clears a face's balls: its corners, edge midpoints and centroid.
 const FREE_SAMPLES: [[f64; 3]; 7] = [
     [1.0, 0.0, 0.0],
     [0.0, 1.0, 0.0],
@@ -409,7 +410,7 @@ fn cleared_lift_mm(faces: &FaceTree, p: DVec3, n: DVec3, face: usize, r: f64, h:
 /// facet, must lift by at most [`FREE_SAMPLED`] of the free lift (the lifts of one face's
 /// contacts vary smoothly, and the margin covers what lies between the samples). Most balls of a
 /// smooth part touch such faces; settling them here saves the clearance search the spacing
-/// would run for each (2.3 million on the 40k-face panel, 0.8 of its 2.4 s).
+/// would run for each (2.3 million on the 40k-face panel: 0.8 s of its 2.4 s).
 fn face_lifts_free(surface: &Surface, faces: &FaceTree, face: usize, r: f64, h: f64) -> bool {
     let bound = FREE_SAMPLED * LIFT_FREE * h;
     if !(surface.face_lift_mm(face, r) <= bound) {
@@ -1443,7 +1444,6 @@ mod tests {
             let tree = FaceTree::new(&surface.positions, &surface.triangles);
             let free: Vec<usize> =
                 (0..surface.triangles.len()).filter(|&f| face_lifts_free(&surface, &tree, f, r, h)).collect();
-            eprintln!("gen{seed}: {} of {} faces free", free.len(), surface.triangles.len());
             (certified, faces) = (certified + free.len(), faces + surface.triangles.len());
             for &f in &free {
                 let [a, b, c] = surface.triangles[f].map(|v| surface.positions[v as usize]);

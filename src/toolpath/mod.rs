@@ -255,6 +255,8 @@ pub enum ToolpathError {
     NotUnitNormal { index: usize, length: f64 },
     #[error("the ball centre at contact point {index} repeats the previous one (distance {distance} mm): remove repeated points")]
     RepeatedPoint { index: usize, distance: f64 },
+    #[error("the tool tip never moves ({points} contact points, one tip): the path is a turn in place")]
+    TipNeverMoves { points: usize },
     #[error("normal {index} faces away from the tool axis (n·axis = {dot}): the ball cannot reach this undercut")]
     Undercut { index: usize, dot: f64 },
     #[error("at contact point {index} the feed direction is along the normal: no lead direction for the 5-axis axis")]
@@ -287,7 +289,7 @@ pub fn toolpath(cc: &[DVec3], normals: &[DVec3], options: &ToolpathOptions) -> R
     let (Some(first_move), Some(last_move)) =
         ((1..=last).find(|&i| moved(i, 0)), (0..last).rev().find(|&i| moved(i, last)))
     else {
-        return Err(ToolpathError::RepeatedPoint { index: 1, distance: tips[1].distance(tips[0]) });
+        return Err(ToolpathError::TipNeverMoves { points: tips.len() });
     };
     let rho = o.lead_in / FRAC_PI_2;
     let lead_in = quarter_circle(tips[0], tips[first_move] - tips[0], o.up, rho, Lead::In);
