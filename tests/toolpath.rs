@@ -311,3 +311,21 @@ fn camelhead_five_axis_a_ball_turning_about_its_tip_is_a_move_in_place() {
     rep_n[1] = rep_n[0];
     assert!(matches!(toolpath(&cc, &rep_n, &five(0.0, 0.0)), Err(ToolpathError::RepeatedPoint { index: 1, .. })));
 }
+
+/// face.stl (R 0.0035 mm, 5 axes) failed with "the feed direction is along the normal" at one
+/// contact point: the clearance lifted a few balls out of a pit along their normal, so the
+/// centres before and after one of them lay on its normal. The feed direction there is taken
+/// over a wider stretch of the path, as on the rest of it.
+#[test]
+fn face_five_axis_a_ball_lifted_along_its_normal_takes_the_feed_of_the_path_round_it() {
+    let cc = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 0.0, 0.4], [2.0, 0.0, 0.4], [3.0, 0.0, 0.4]]
+        .map(DVec3::from_array);
+    let n = [DVec3::Z; 6];
+    let tp = toolpath(&cc, &n, &five(15.0, 0.0)).expect("plans with the wider feed direction");
+    let axes: Vec<DVec3> = tp.contact_moves().iter().map(|m| m.axis).collect();
+    // Every point feeds along +x: its axis leans 15° in the x–z plane, the same at all of them.
+    for a in &axes {
+        assert!((a.angle_between(DVec3::Z).to_degrees() - 15.0).abs() < 1e-9 && a.y.abs() < 1e-12, "{a}");
+        assert!(a.distance(axes[0]) < 1e-12);
+    }
+}
