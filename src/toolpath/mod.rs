@@ -10,7 +10,7 @@
 //!   `a = cos β·cos γ·n + sin β·t + cos β·sin γ·b`, where β is the lead angle, γ the tilt angle,
 //!   `t` the unit feed direction projected onto the tangent plane (centred difference of the ball
 //!   centres, one-sided at the ends: where the ball rolls over a vertex of the mesh its contact
-//!   stays put while the centre moves) and `b = t × n` (to the right of the feed direction seen from
+//!   stays put while the centre moves; widened where it runs along the normal) and `b = t × n` (to the right of the feed direction seen from
 //!   the tool). So a positive lead leans the axis forwards (towards the feed direction), the tilt
 //!   rotates the leaned axis about `t`, positive to the right. γ = 0 is eq. 5 exactly. The
 //!   centred difference makes the axis as smooth as the path itself (no extra smoothing),
@@ -41,9 +41,9 @@
 //! Preconditions (each fault is a [`ToolpathError`] naming the field or point index): at least
 //! two points, as many normals as points, finite coordinates, normals of length 1 ± 1e-3
 //! (renormalised), consecutive ball centres at least 1e-7 mm apart, 3-axis normals not facing away
-//! from the tool axis (n·a ≥ 0: no undercut), 5-axis feed directions not along the normal,
-//! options as documented on [`ToolpathOptions`], and a safe height at least `clearance_mm`
-//! above every contact point, tool tip and lead move.
+//! from the tool axis (n·a ≥ 0: no undercut), 5-axis paths that do not run along their normals
+//! throughout, tool tips that move at least once, options as documented on [`ToolpathOptions`],
+//! and a safe height at least `clearance_mm` above every contact point, tool tip and lead move.
 //!
 //! Invariants of the output: the moves are Rapid, Rapid, Approach…, Cut…, LeadOut…, Retract, in
 //! that order; the moves ending at the n contact points are [`Toolpath::contact_moves`] (the
@@ -489,8 +489,8 @@ fn tool_axes(centres: &[DVec3], n: &[DVec3], o: &Checked) -> Result<Vec<DVec3>, 
     let last = centres.len() - 1;
     // The feed direction in the tangent plane: the centres' central difference, widened where it
     // runs along the normal (a ball lifted out of a pit or a crease by the clearance moves along
-    // its normal for a step or two: face.stl, R 0.0035 mm, 5 axes). The widening doubles, so a
-    // path along its normal for its whole length costs about twice its length.
+    // its normal for a step or two: face.stl, R 0.0035 mm, 5 axes). The widening doubles: at most
+    // log₂ n + 1 differences per point.
     let feed = |i: usize| -> Option<DVec3> {
         let mut k = 1;
         loop {
