@@ -1422,11 +1422,7 @@ mod tests {
         // Brute force: balls touching certified faces at random points, each cleared of every
         // facet, lift by at most LIFT_FREE·h and along their own normal, on generated parts with
         // staircase rims and skinny triangles, where many faces are not free.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut unit = move || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::fixtures::SplitMix64(45);
         let (mut certified, mut faces) = (0, 0);
         for (seed, r, h) in [
             (0, 1.75, 0.0064),
@@ -1448,7 +1444,7 @@ mod tests {
             for &f in &free {
                 let [a, b, c] = surface.triangles[f].map(|v| surface.positions[v as usize]);
                 for _ in 0..8 {
-                    let (u, v) = (unit(), unit());
+                    let (u, v) = (rng.unit(), rng.unit());
                     let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
                     let bary = [1.0 - u - v, u, v];
                     let n = surface.normal_at(f, bary);
