@@ -207,3 +207,33 @@ fn issue_34_sweep_gen114_a_path_over_h_is_spaced_again() {
     assert!(row.max_outside_valleys_over_h <= 1.0, "{}", row.finish());
     assert!(row.within_limits(), "{}", row.finish());
 }
+
+/// Found planning gen14 from poles of the user's choice: from (−16, 20, 0) the slit map of its
+/// 8k-face mesh folds 5 triangles, and the path misses a quarter of the part (142 h deep).
+/// Before, the report had no warning (a note said the retry left as much), and the retry spaced
+/// the rings 12 times closer for nothing. The plan now warns where the path is over h, how much
+/// of the surface the ball never reaches and that the map folds at this origin, and does not
+/// space the rings again for an excess over [`plan::MAX_RETRY_EXCESS`] h.
+#[test]
+fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again() {
+    let part = generated::part(14, 8000..=8000);
+    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
+    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let h = 0.0157;
+    let options = plan::PlanOptions {
+        radius_mm: 2.29,
+        scallop_mm: h,
+        origin: slitpath::origin::OriginChoice::Point3d(glam::DVec3::new(-16.0, 20.0, 0.0)),
+        verify_samples: 20_000,
+        ..Default::default()
+    };
+    let plan = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plans");
+    let report = &plan.report;
+    let v = report.verify.as_ref().expect("verified");
+    println!("{:?}", report.warnings);
+    assert!(report.flipped_triangles > 0 && v.max_scallop_outside_valleys_mm > plan::MAX_RETRY_EXCESS * h, "{v:?}");
+    assert!(report.spacing_retries.is_empty(), "{:?}", report.spacing_retries);
+    let warned = report.warnings.iter().find(|w| w.starts_with("the path leaves up to")).expect("a scallop warning");
+    let unreached = format!("never reaches {:.2} %", 100.0 * v.uncovered_fraction);
+    assert!(v.uncovered_fraction > 0.01 && warned.contains(&unreached) && warned.contains("folds"), "{warned}");
+}

@@ -28,7 +28,7 @@ use serde::Serialize;
 mod paths;
 mod report;
 use paths::{Field, Finished, Run};
-pub use paths::{SpacingRetry, OPTIMISED_TARGET_FRACTION, RETRY_AIM};
+pub use paths::{SpacingRetry, MAX_RETRY_EXCESS, OPTIMISED_TARGET_FRACTION, RETRY_AIM};
 pub use report::*;
 
 /// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the

@@ -9,12 +9,12 @@
 //!    h outside the facet valleys (where the facets alone leave more, and the plan has warned),
 //!    or its plan failed, the conformal map's path (seed 000) is planned too and the better one
 //!    kept.
-//! 2. Where the path kept still leaves more than h, its rings are spaced again, once, on the same
-//!    field, for a cusp smaller in proportion to the excess ([`RETRY_AIM`]), and the better of
-//!    the two kept. Retrying the optimised field's path first was tried: on gen114 of the
-//!    generated parts its excess (1.10 h, the conformal map's 1.02 h) asked for 12 % smaller
-//!    cusps, and its path came out 11 % longer than the conformal map's (6 % longer than that one
-//!    spaced again).
+//! 2. Where the path kept still leaves more than h (but at most [`MAX_RETRY_EXCESS`] h), its
+//!    rings are spaced again, once, on the same field, for a cusp smaller in proportion to the
+//!    excess ([`RETRY_AIM`]), and the better of the two kept. Retrying the optimised field's
+//!    path first was tried: on gen114 of the generated parts its excess (1.10 h, the conformal
+//!    map's 1.02 h) asked for 12 % smaller cusps, and its path came out 11 % longer than the
+//!    conformal map's (6 % longer than that one spaced again).
 //!
 //! A part whose first path keeps h costs nothing more and gets the same G-code. The retries are
 //! reported (`spacing_retries`), and so is the field kept (`optimise.path_field`).
@@ -39,6 +39,12 @@ pub const OPTIMISED_TARGET_FRACTION: f64 = 0.92;
 /// scales about as the cusps the spacing plans (both are set by the rings' distance), so the
 /// retry's peak lands near this fraction of h.
 pub const RETRY_AIM: f64 = 0.97;
+
+/// A path leaving more than this many times h is not spaced again: an excess that large is not
+/// the rings' margin but a region the path misses (a fold of the map at the pole: gen14 of the
+/// generated parts from (−15, 20, 0) left 140 h, and its rings spaced for 0.006 h, 12 times the
+/// path, still left 142 h). The sweep's retries were at 1.1–2.0 h. The report's warning says so.
+pub const MAX_RETRY_EXCESS: f64 = 2.0;
 
 /// What every path of one plan shares: the options, the progress callback, the clock and the
 /// stage timings (summed over every path planned).
@@ -215,11 +221,12 @@ impl Planner {
         Ok(self.retried(run, origin, chosen?))
     }
 
-    /// `fin`, or, when it leaves more than h outside the facet valleys, its field's rings spaced
-    /// again for a smaller cusp (see [`RETRY_AIM`]) when that leaves less.
+    /// `fin`, or, when it leaves more than h outside the facet valleys (up to
+    /// [`MAX_RETRY_EXCESS`] h), its field's rings spaced again for a smaller cusp (see
+    /// [`RETRY_AIM`]) when that leaves less.
     fn retried(&self, run: &mut Run, origin: &Origin, fin: Finished) -> Finished {
         let h = run.options.scallop_mm;
-        if !fin.exceeds(h) {
+        if !fin.exceeds(h) || fin.max_over_h(h) > MAX_RETRY_EXCESS {
             return fin;
         }
         let target = fin.field.target_fraction();

@@ -284,6 +284,9 @@ impl PlanReport {
         if let Some(v) = &report.verify {
             let unresolved = report.path.clearance.unresolved;
             report.warnings.extend(gouge_warning(v.gouges, v.samples, v.max_gouge_mm, unresolved, options.radius_mm));
+            let at = v.max_outside_valleys_at.map(|a| a.position);
+            let (max, unreached) = (v.max_scallop_outside_valleys_mm, v.uncovered_fraction);
+            report.warnings.extend(scallop_warning(max, at, unreached, options.scallop_mm, report.flipped_triangles));
         }
         let radii = rings.radii();
         let locate = |at: Option<&verify::ScallopAt>| at.and_then(|a| PeakAt::locate(a, &planner.surface, map, &radii));
@@ -317,6 +320,39 @@ fn gouge_warning(
     };
     Some(format!(
         "the path gouges the part: the verifier found the ball up to {max_gouge_mm:.4} mm inside it at {gouges} of its {samples} samples{wedged}; use a ball smaller than {radius_mm} mm"
+    ))
+}
+
+/// The warning for a path the verifier finds leaving `max_mm` > `h_mm` outside the facet valleys
+/// (those have their own warning): where (`at`), the fraction of the surface the ball never
+/// reaches, and the likely cause. At a pole the user chose where the slit map folds (gen14 of
+/// the generated parts at (−15, 20, 0)), the path missed 3.4 % of the part, 140 h deep, and
+/// only a note on the spacing's retry said so.
+fn scallop_warning(
+    max_mm: f64,
+    at: Option<[f64; 3]>,
+    unreached_fraction: f64,
+    h_mm: f64,
+    flipped_triangles: usize,
+) -> Option<String> {
+    if max_mm <= h_mm {
+        return None;
+    }
+    let at = at.map_or(String::new(), |[x, y, z]| format!(" at ({x:.2}, {y:.2}, {z:.2})"));
+    let unreached = if unreached_fraction > 0.0 {
+        format!("; the ball never reaches {:.2} % of the surface", 100.0 * unreached_fraction)
+    } else {
+        String::new()
+    };
+    let cause = if flipped_triangles > 0 {
+        let s = if flipped_triangles == 1 { "" } else { "s" };
+        format!("; the slit map folds {flipped_triangles} triangle{s} at this origin: plan from another one")
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "the path leaves up to {max_mm:.4} mm ({:.2} h) outside the facet valleys{at}, over the limit h = {h_mm} mm{unreached}{cause}",
+        max_mm / h_mm
     ))
 }
 
@@ -359,6 +395,17 @@ pub(super) fn header_lines(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_path_over_h_is_warned_about_with_where_and_what_it_misses() {
+        assert_eq!(scallop_warning(0.0157, Some([0.0; 3]), 0.0, 0.0157, 0), None);
+        let w = scallop_warning(0.016, None, 0.0, 0.0157, 0).unwrap();
+        assert!(w.contains("(1.02 h)") && !w.contains("never reaches") && !w.contains("folds"), "{w}");
+        // gen14 of the generated parts from the pole (−15, 20, 0).
+        let w = scallop_warning(2.1928, Some([-28.6748, -10.8177, -1.6105]), 0.0336, 0.0157, 1).unwrap();
+        assert!(w.contains("2.1928 mm (139.67 h)") && w.contains("at (-28.67, -10.82, -1.61)"), "{w}");
+        assert!(w.contains("never reaches 3.36 %") && w.contains("folds 1 triangle at"), "{w}");
+    }
 
     #[test]
     fn a_gouging_path_is_warned_about_with_its_depth_and_the_wedged_balls() {
