@@ -10,10 +10,11 @@
 //!   `a = cos β·cos γ·n + sin β·t + cos β·sin γ·b`, where β is the lead angle, γ the tilt angle,
 //!   `t` the unit feed direction projected onto the tangent plane (centred difference of the ball
 //!   centres, one-sided at the ends: where the ball rolls over a vertex of the mesh its contact
-//!   stays put while the centre moves; widened where it runs along the normal) and `b = t × n` (to the right of the feed direction seen from
-//!   the tool). So a positive lead leans the axis forwards (towards the feed direction), the tilt
-//!   rotates the leaned axis about `t`, positive to the right. γ = 0 is eq. 5 exactly. The
-//!   centred difference makes the axis as smooth as the path itself (no extra smoothing),
+//!   stays put while the centre moves; widened where it runs along the normal) and `b = t × n`
+//!   (to the right of the feed direction seen from the tool). So a positive lead leans the axis
+//!   forwards (towards the feed direction), the tilt rotates the leaned axis about `t`, positive
+//!   to the right. γ = 0 is eq. 5 exactly. The centred difference makes the axis as smooth as
+//!   the path itself (no extra smoothing),
 //! - the tool tip `tip = centre − R·a` (the point a controller programs: tool length
 //!   compensation and, for 5-axis, tool-centre-point control are the machine's business).
 //!
