@@ -346,7 +346,7 @@ fn edges_of(surface: &Surface, map: &SlitMap) -> Vec<GateEdge> {
     edges
         .iter()
         .map(|e| {
-            let (a, b) = super::strip_edge(map, e.0[0], e.0[1]);
+            let (a, b) = super::features::strip_edge(map, e.0[0], e.0[1]);
             (e.0, normals(e), a, b)
         })
         .collect()
@@ -623,7 +623,7 @@ impl<'r> Cutter<'r> {
         Some((du2.sqrt() - dl2.sqrt(), du2 <= r2 || dl2 <= r2))
     }
 
-    /// The cusps along the run of points `out[first..]` that [`line`] laid from `a` to `b`:
+    /// The cusps along the run of points `out[first..]` that [`line()`] laid from `a` to `b`:
     /// where the nearer ring changes between two of them, the point where both are equally far
     /// (regula falsi: along a line the difference of the two distances is nearly linear), added
     /// to `out`. The scallop peaks in a narrow V there (its flanks slope by about √(2h/R)):

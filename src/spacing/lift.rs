@@ -428,7 +428,7 @@ fn gap(theta: f64, e: &(f64, f64, DVec2, DVec2)) -> f64 {
 /// widths; columns are uniform in angle over (−2π, 2π) (per-face unwrapping may leave (−π, π]).
 #[derive(Debug, Clone)]
 struct StripIndex {
-    /// Row boundaries in y (|w|), increasing; row k is [rows[k], rows[k + 1]).
+    /// Row boundaries in y (|w|), increasing; row k is `[rows[k], rows[k + 1])`.
     rows: Vec<f64>,
     /// Uniform bins over the finite row boundaries, (lower edge, bins per unit of y), and the
     /// row of each bin's lower edge: a row is found by a step or two instead of a binary search.
