@@ -45,6 +45,7 @@ pub mod plan;
 pub mod slitmap;
 pub mod spacing;
 pub mod spiral;
+pub mod spread;
 pub mod step;
 pub mod toolpath;
 pub mod verify;

@@ -287,6 +287,19 @@ fn plan_optimises_the_field_by_default_and_reports_it() {
     // A larger α is accepted and reported; a bad choice is one line on stderr.
     let (_, smoother) = run(&["--alpha", "100"]);
     assert_eq!(smoother["optimise"]["alpha"].as_f64(), Some(100.0));
+    // `--spread need` plans the field spread by each meridian's need too, and reports both paths
+    // (the one written is the shorter within h); a bad choice is one line on stderr.
+    let (gcode, spread) = run(&["--spread", "need"]);
+    let s = &spread["spread"];
+    let written = spread["path"]["length_mm"].as_f64().unwrap();
+    let (mine, other) = (s["length_mm"].as_f64().unwrap(), s["unspread_length_mm"].as_f64().unwrap());
+    assert_eq!(s["kept"].as_bool(), Some(mine < other && s["max_over_h"].as_f64().unwrap() <= 1.0), "{s}");
+    assert_eq!(written, if s["kept"].as_bool().unwrap() { mine } else { other });
+    assert_eq!(gcode.contains("spread by each meridian's need"), s["kept"].as_bool().unwrap());
+    assert!(optimised.get("spread").is_none());
+    let bad = slitpath(&["plan", part.to_str().unwrap(), "--spread", "wide", "-o", temp("w.ngc").to_str().unwrap()]);
+    let err = String::from_utf8(bad.stderr).unwrap();
+    assert!(!bad.status.success() && err.trim().lines().count() == 1 && err.contains("--spread `wide`"), "{err}");
     let bad = slitpath(&["plan", part.to_str().unwrap(), "--optimise", "best", "-o", temp("y.ngc").to_str().unwrap()]);
     let err = String::from_utf8(bad.stderr).unwrap();
     assert!(!bad.status.success() && err.trim().lines().count() == 1 && err.contains("--optimise `best`"), "{err}");

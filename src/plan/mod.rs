@@ -20,6 +20,7 @@ use crate::origin::{self, Origin, OriginChoice, OriginError, OriginOptions};
 use crate::slitmap::{PlanarDomain, SlitMap, SlitMapError, SlitMapOptions, SlitMapSolver};
 use crate::spacing::{Lift, Rings, SpacingError, SpacingIndex, SpacingOptions};
 use crate::spiral::{self, Cut, Direction, Spiral, SpiralError, SpiralOptions};
+use crate::spread::{SpreadError, SpreadOptions};
 use crate::toolpath::{self, Axes, Toolpath, ToolpathError, ToolpathOptions};
 use crate::verify::{self, PathMetrics, Verification, VerifyError, VerifyOptions};
 use glam::{DVec2, DVec3};
@@ -28,7 +29,7 @@ use serde::Serialize;
 mod paths;
 mod report;
 use paths::{Field, Finished, Run};
-pub use paths::{SpacingRetry, MAX_RETRY_EXCESS, OPTIMISED_TARGET_FRACTION, RETRY_AIM};
+pub use paths::{SpacingRetry, SpreadSummary, MAX_RETRY_EXCESS, OPTIMISED_TARGET_FRACTION, RETRY_AIM};
 pub use report::*;
 
 /// Everything a plan can be asked for. `Default` gives the documented defaults, the same as the
@@ -71,6 +72,19 @@ pub struct PlanOptions {
     /// α of seed 003 eq. 14 (path smoothness against scallop uniformity), on the paper's scale
     /// (see [`OptimiseOptions::alpha`]). Default 10.
     pub alpha: f64,
+    /// Whether a path whose rings are spread by each meridian's own need ([`crate::spread`]) is
+    /// planned too, and written when shorter at the same finish. Default [`RingSpread::None`].
+    pub spread: RingSpread,
+}
+
+/// How the rings share out along each meridian of the field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RingSpread {
+    /// The field's own level sets: every meridian gets the rings its worst one needs.
+    None,
+    /// The field warped along each meridian by its need ([`crate::spread`]).
+    Need,
 }
 
 /// The scalar field the rings are level sets of.
@@ -123,6 +137,7 @@ impl Default for PlanOptions {
             facets: Facets::Exact,
             optimise: Optimise::Tpsfo,
             alpha: OptimiseOptions::default().alpha,
+            spread: RingSpread::None,
         }
     }
 }
@@ -142,6 +157,8 @@ pub enum PlanError {
     Origin(#[from] OriginError),
     #[error("optimise: {0}")]
     Optimise(#[from] OptimiseError),
+    #[error("spread: {0}")]
+    Spread(#[from] SpreadError),
     #[error("spacing: {0}")]
     Spacing(#[from] SpacingError),
     #[error("spiral: {0}")]
@@ -156,7 +173,7 @@ pub enum PlanError {
 
 impl PlanError {
     /// The stage that failed, as the sweeps group failures: `options`, `mesh`, `flatten`,
-    /// `slitmap`, `origin`, `optimise`, `spacing`, `spiral`, `toolpath`, `gcode` or `verify`.
+    /// `slitmap`, `origin`, `optimise`, `spread`, `spacing`, `spiral`, `toolpath`, `gcode` or `verify`.
     pub fn stage(&self) -> &'static str {
         match self {
             PlanError::InvalidOption(_) => "options",
@@ -165,6 +182,7 @@ impl PlanError {
             PlanError::SlitMap(_) => "slitmap",
             PlanError::Origin(_) => "origin",
             PlanError::Optimise(_) => "optimise",
+            PlanError::Spread(_) => "spread",
             PlanError::Spacing(_) => "spacing",
             PlanError::Spiral(_) => "spiral",
             PlanError::Toolpath(_) => "toolpath",
@@ -399,11 +417,16 @@ impl Planner {
             verification,
             gcode,
             retries,
+            spread,
         } = finished;
         let mut report = PlanReport::new(self, options, &origin, &map, &rings, summary, verification, timings);
         report.origin.rejected = rejected;
         report.optimise = optimise;
         report.spacing_retries = retries;
+        if spread.as_ref().is_some_and(|s| s.kept) {
+            (report.max_scallop_at, report.max_outside_valleys_at) = (None, None);
+        }
+        report.spread = spread;
         Ok(Plan { origin, map, rings, spiral, toolpath, path, gcode, report })
     }
 
@@ -428,7 +451,7 @@ impl Planner {
         run.timings.optimise += (run.now)() - t;
         let optimised = optimised?;
         let optimise = optimised.report.map(|o| OptimiseSummary { stage: Some(o), ..OptimiseSummary::default() });
-        Ok((Field { map: optimised.map, optimised: optimise.is_some() }, optimise))
+        Ok((Field { map: optimised.map, optimised: optimise.is_some(), spread: false }, optimise))
     }
 
     /// From a field on: rings spaced for a cusp of `target_fraction`·h, the spiral, tool
@@ -440,7 +463,7 @@ impl Planner {
         field: Field,
         target_fraction: f64,
     ) -> Result<Finished, PlanError> {
-        let (rings, spiral) = self.rings_and_spiral(run, &field.map, target_fraction)?;
+        let (rings, spiral) = self.rings_and_spiral(run, &field.map, field.spread, target_fraction)?;
         let Run { options, spiral_options, stage, timings, now } = run;
         let r = options.radius_mm;
         stage(4);
@@ -495,7 +518,7 @@ impl Planner {
         };
         let mut post_ms = 0.0;
         let (verification, gcode) = crate::par::beside(verify_centres, || {
-            let header = header_lines(options, origin, &rings, &summary, field.optimised);
+            let header = header_lines(options, origin, &rings, &summary, field.optimised, field.spread);
             let gcode_options = GcodeOptions {
                 post: options.post,
                 part_name: options.part_name.clone(),
@@ -520,6 +543,7 @@ impl Planner {
             verification,
             gcode,
             retries: Vec::new(),
+            spread: None,
         })
     }
 
@@ -529,6 +553,7 @@ impl Planner {
         &self,
         run: &mut Run,
         map: &SlitMap,
+        spread: bool,
         target_fraction: f64,
     ) -> Result<(Rings, Spiral), PlanError> {
         let Run { options, spiral_options, stage, timings, now } = run;
@@ -545,10 +570,25 @@ impl Planner {
         // the map. The part's facet tree serves: the crease-split surface has the same positions
         // and triangles.
         let surface = self.riding(options.facets);
-        let (lift, index) = crate::par::join(
-            || Lift::new(surface, map),
-            || SpacingIndex::new(surface, map, &self.faces, &spacing_options),
-        );
+        // A spread field is lifted through its warp, and indexed in the warp's image of the map.
+        let mut image = None;
+        let (lift, index) = if spread {
+            let lift = Lift::new(surface, map);
+            let spread_options = SpreadOptions {
+                radius_mm: options.radius_mm,
+                scallop_mm: options.scallop_mm,
+                ..SpreadOptions::default()
+            };
+            let spread = crate::spread::spread(&lift, &spread_options)?;
+            let lift = lift.spread(image.insert(spread.image(surface, map)), spread);
+            let index = SpacingIndex::on(&lift, &self.faces, &spacing_options);
+            (lift, index)
+        } else {
+            crate::par::join(
+                || Lift::new(surface, map),
+                || SpacingIndex::new(surface, map, &self.faces, &spacing_options),
+            )
+        };
         let rings = index.and_then(|index| index.rings(&lift));
         timings.spacing += now() - t;
         let rings = rings?;

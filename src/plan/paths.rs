@@ -19,7 +19,7 @@
 //! A part whose first path keeps h costs nothing more and gets the same G-code. The retries are
 //! reported (`spacing_retries`), and so is the field kept (`optimise.path_field`).
 
-use super::{OptimiseSummary, PathSummary, PlanError, PlanOptions, Planner, Timings};
+use super::{OptimiseSummary, PathSummary, PlanError, PlanOptions, Planner, RingSpread, Timings};
 use crate::origin::Origin;
 use crate::slitmap::SlitMap;
 use crate::spacing::{Rings, SpacingOptions};
@@ -56,11 +56,13 @@ pub(super) struct Run<'a> {
     pub now: &'a dyn Fn() -> f64,
 }
 
-/// The field the rings are level sets of: the pole's slit map, optimised (seed 003) or not.
+/// The field the rings are level sets of: the pole's slit map, optimised (seed 003) or not,
+/// spread by each meridian's need ([`crate::spread`]) or not.
 #[derive(Clone)]
 pub(super) struct Field {
     pub map: SlitMap,
     pub optimised: bool,
+    pub spread: bool,
 }
 
 impl Field {
@@ -96,6 +98,26 @@ pub(super) struct Finished {
     pub gcode: String,
     /// The paths of this plan spaced again because an earlier one left more than h.
     pub retries: Vec<SpacingRetry>,
+    /// With `--spread need`: the spread field's path and whether it was kept.
+    pub spread: Option<SpreadSummary>,
+}
+
+/// The spread field's path ([`crate::spread`], `--spread need`) against the path of the field
+/// without it (the plan report's `spread`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpreadSummary {
+    /// Whether the spread field's path was written: it keeps h outside the facet valleys, and is
+    /// shorter or the other one does not keep h.
+    pub kept: bool,
+    /// The spread field's path: its length and largest scallop outside the facet valleys over h
+    /// (`None` when its plan failed, see `error`).
+    pub length_mm: Option<f64>,
+    pub max_over_h: Option<f64>,
+    /// The path without the spread: its length and largest scallop over h.
+    pub unspread_length_mm: f64,
+    pub unspread_max_over_h: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
 }
 
 /// A path whose verification left more than h outside the facet valleys, and its rings spaced
@@ -218,7 +240,41 @@ impl Planner {
                 }
             }
         };
-        Ok(self.retried(run, origin, chosen?))
+        let chosen = self.retried(run, origin, chosen?);
+        Ok(match run.options.spread {
+            RingSpread::Need => self.spread_or(run, origin, chosen),
+            RingSpread::None => chosen,
+        })
+    }
+
+    /// The path of `fin`'s field spread by each meridian's need, when it keeps h and is shorter
+    /// (or `fin` does not keep h), else `fin`; either way with the comparison reported.
+    fn spread_or(&self, run: &mut Run, origin: &Origin, fin: Finished) -> Finished {
+        let h = run.options.scallop_mm;
+        let field = Field { spread: true, ..fin.field.clone() };
+        let target = field.target_fraction();
+        let mut summary = SpreadSummary {
+            kept: false,
+            length_mm: None,
+            max_over_h: None,
+            unspread_length_mm: fin.summary.length_mm,
+            unspread_max_over_h: fin.max_over_h(h),
+            error: None,
+        };
+        match self.finish(run, origin, field, target) {
+            Ok(spread) => {
+                summary.length_mm = Some(spread.summary.length_mm);
+                summary.max_over_h = Some(spread.max_over_h(h));
+                summary.kept =
+                    !spread.exceeds(h) && (fin.exceeds(h) || spread.summary.length_mm < fin.summary.length_mm);
+                if summary.kept {
+                    let Finished { optimise, retries, .. } = fin;
+                    return Finished { optimise, retries, spread: Some(summary), ..spread };
+                }
+            }
+            Err(e) => summary.error = Some(e.to_string()),
+        }
+        Finished { spread: Some(summary), ..fin }
     }
 
     /// `fin`, or, when it leaves more than h outside the facet valleys (up to

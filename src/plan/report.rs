@@ -1,7 +1,7 @@
 //! The plan report (`slitpath plan --report`, the page's figures) and the G-code header: what a
 //! plan tells its user besides the path. Plain data built from the stages' outputs.
 
-use super::{Facets, PlanOptions, Planner, RejectedPole, SpacingRetry, Timings};
+use super::{Facets, PlanOptions, Planner, RejectedPole, SpacingRetry, SpreadSummary, Timings};
 use crate::flatten::FlattenReport;
 use crate::mesh::creases::FacetValleys;
 use crate::mesh::{MeshReport, Surface};
@@ -191,6 +191,9 @@ pub struct PlanReport {
     /// Seed 003's optimisation of the field (absent with `--optimise none`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub optimise: Option<OptimiseSummary>,
+    /// With `--spread need`: the spread field's path against the other (see [`SpreadSummary`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spread: Option<SpreadSummary>,
     /// Paths whose verification left more than h outside the facet valleys, spaced again for a
     /// smaller cusp ([`super::paths`]); empty when the first path kept h.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -199,7 +202,8 @@ pub struct PlanReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verify: Option<Verification>,
     /// Where the verifier's largest scallop lies in the slit domain and between which rings
-    /// (absent without verification).
+    /// (absent without verification, and for a spread field's path, whose rings are not circles
+    /// of the map).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_scallop_at: Option<PeakAt>,
     /// The same for its largest scallop outside the facet valleys.
@@ -255,6 +259,7 @@ impl PlanReport {
             crease_compromises: rings.crease_compromises,
             gate_compromises: rings.gate_compromises,
             optimise: None,
+            spread: None,
             spacing_retries: Vec::new(),
             path,
             max_scallop_at: None,
@@ -363,13 +368,17 @@ pub(super) fn header_lines(
     rings: &Rings,
     path: &PathSummary,
     optimised: bool,
+    spread: bool,
 ) -> Vec<(String, String)> {
     let opts = OptionsReport::new(o);
-    let field = if optimised {
+    let mut field = if optimised {
         format!("seed 003 optimised, tpsfo, alpha {}", o.alpha)
     } else {
         "conformal slit map, seed 000".to_string()
     };
+    if spread {
+        field.push_str(", spread by each meridian's need");
+    }
     let mut lines = vec![
         ("planner".to_string(), "slitpath conformal slit-map spiral".to_string()),
         ("field".into(), field),

@@ -212,9 +212,12 @@ impl<'a> Gate<'a> {
     /// are laid and labelled in the strip's P1 image, which the lift inverts everywhere but in
     /// its pole star (lifted through the w plane, see [`Lift::image_of`]): there a ring moved up
     /// to a point's strip radius could still pass a band away from it (gen017: 0.27 mm beside a
-    /// slit's chords, the gate compromised and left 1.38 h).
+    /// slit's chords, the gate compromised and left 1.38 h). In a spread field
+    /// ([`Lift::spread`]) the P1 image is not the lift's anywhere: every point is relabelled.
     pub(super) fn relabel(&self, p: &mut GatePoint, lift: &Lift<'_>) {
-        if let Some(hit) = self.faces.nearest(p.0, self.radius_mm).filter(|hit| lift.in_pole_star(hit.face)) {
+        if let Some(hit) =
+            self.faces.nearest(p.0, self.radius_mm).filter(|hit| lift.is_spread() || lift.in_pole_star(hit.face))
+        {
             (p.2, p.3) = lift.image_of(hit.face, hit.bary);
         }
     }

@@ -12,6 +12,7 @@ use crate::mesh::topology::vertex_faces;
 use crate::mesh::Surface;
 use crate::num;
 use crate::slitmap::{barycentric, clamp_barycentric, SlitMap};
+use crate::spread::Spread;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -51,6 +52,9 @@ pub struct Lift<'a> {
     /// Faces around each vertex (CSR): `vertex_faces[vertex_start[v]..vertex_start[v + 1]]`.
     vertex_start: Vec<u32>,
     vertex_faces: Vec<u32>,
+    /// With [`Lift::spread`]: the map located in (`map` is then its image under the warp).
+    base: &'a SlitMap,
+    spread: Option<std::sync::Arc<Spread>>,
 }
 
 impl<'a> Lift<'a> {
@@ -64,7 +68,31 @@ impl<'a> Lift<'a> {
         for &(f, _) in star.iter().flat_map(|s| &s.faces) {
             corners[f] = [DVec2::NAN; 3];
         }
-        Self { surface, map, star, strip: StripIndex::new(&corners), corners, vertex_start, vertex_faces }
+        let strip = StripIndex::new(&corners);
+        Self { surface, map, star, strip, corners, vertex_start, vertex_faces, base: map, spread: None }
+    }
+
+    /// This lift answering in the spread field ([`crate::spread`]): queries (|w'|, arg w) are
+    /// moved along their ray by [`Spread::inverse`] and located in the map as before, so the
+    /// warp is exact however sharply it turns; `image` ([`Spread::image`]) is what
+    /// [`Lift::map`] returns from then on.
+    pub fn spread(self, image: &'a SlitMap, spread: Spread) -> Self {
+        Self { map: image, spread: Some(std::sync::Arc::new(spread)), ..self }
+    }
+
+    /// Whether queries are in a spread field ([`Lift::spread`]).
+    pub fn is_spread(&self) -> bool {
+        self.spread.is_some()
+    }
+
+    /// The map points are located in: [`Lift::map`], or the one it is the spread image of.
+    pub fn base_map(&self) -> &'a SlitMap {
+        self.base
+    }
+
+    /// The located map's radius of the query (|w'|, arg w).
+    fn unspread(&self, rho: f64, theta: f64) -> f64 {
+        self.spread.as_ref().map_or(rho, |s| s.inverse(theta, rho))
     }
 
     /// (map vertices, surface vertices) when `map` is not a slit map of `surface` (they differ
@@ -91,6 +119,12 @@ impl<'a> Lift<'a> {
     /// The surface point whose image is `rho · e^{iθ}` (the nearest image triangle when it falls
     /// just outside the image, e.g. by rounding on the unit circle).
     pub fn polar(&self, rho: f64, theta: f64) -> Option<Lifted> {
+        let located = self.polar_located(self.unspread(rho, theta), theta)?;
+        Some(Lifted { rho, ..located })
+    }
+
+    /// [`Lift::polar`] in the located map's own radius.
+    fn polar_located(&self, rho: f64, theta: f64) -> Option<Lifted> {
         if let Some(lifted) = self.in_star(rho, theta, false) {
             return Some(lifted);
         }
@@ -124,6 +158,12 @@ impl<'a> Lift<'a> {
     /// walks get stuck, [`Lift::polar`] (keeping the stuck face's nearest point instead made a
     /// 1 mm jump on plate_holes, where the walk was stopped by the pole star).
     pub fn polar_near(&self, rho: f64, theta: f64, near: u32) -> Option<Lifted> {
+        let located = self.polar_near_located(self.unspread(rho, theta), theta, near)?;
+        Some(Lifted { rho, ..located })
+    }
+
+    /// [`Lift::polar_near`] in the located map's own radius.
+    fn polar_near_located(&self, rho: f64, theta: f64, near: u32) -> Option<Lifted> {
         if self.in_star(rho, theta, false).is_none() {
             let x = crate::num::rem_tau(theta + PI) - PI;
             let score = |f: usize| {
@@ -159,7 +199,7 @@ impl<'a> Lift<'a> {
                 }
             }
         }
-        self.polar(rho, theta)
+        self.polar_located(rho, theta)
     }
 
     /// Walks from face `from` across the edge the query lies beyond (the corner with the most
@@ -205,6 +245,12 @@ impl<'a> Lift<'a> {
     /// chords moves points by up to a band (gen017: 0.27 mm). Points located on the surface
     /// (the gate's) get the radius of the ring that runs through them from here.
     pub fn image_of(&self, face: usize, bary: [f64; 3]) -> (f64, f64) {
+        let (rho, theta) = self.located_image_of(face, bary);
+        (self.spread.as_ref().map_or(rho, |s| s.forward(theta, rho)), theta)
+    }
+
+    /// [`Lift::image_of`] in the located map.
+    fn located_image_of(&self, face: usize, bary: [f64; 3]) -> (f64, f64) {
         if let Some(image) = self.star.as_ref().and_then(|star| star.image_of(face, bary)) {
             return image;
         }

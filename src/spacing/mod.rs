@@ -187,7 +187,7 @@ pub fn spacing(surface: &Surface, map: &SlitMap, options: &SpacingOptions) -> Re
 /// shared with [`crate::spiral::spiral_on`]); `faces` is the facet tree of that surface (a
 /// planner keeps one per part).
 pub fn spacing_on(lift: &Lift<'_>, faces: &FaceTree, options: &SpacingOptions) -> Result<Rings, SpacingError> {
-    SpacingIndex::new(lift.surface(), lift.map(), faces, options)?.rings(lift)
+    SpacingIndex::on(lift, faces, options)?.rings(lift)
 }
 
 /// What the spacing indexes of one slit map before its rings are found (the gate's edges,
@@ -277,6 +277,9 @@ const CLUSTER: usize = 32;
 
 /// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
 const GATE_FRACTION: f64 = 0.95;
+/// In a spread field the gate lays the band this many band widths wider on each side (see
+/// [`Spacer::gate_test`]).
+const SPREAD_GATE_PAD: f64 = 3.0;
 /// Rounds of moving a ring up before the gate gives in (reported).
 const GATE_ROUNDS: usize = 4;
 /// Bisection steps per round.
@@ -291,6 +294,25 @@ impl<'a> SpacingIndex<'a> {
     pub fn new(
         surface: &'a Surface,
         map: &'a SlitMap,
+        faces: &'a FaceTree,
+        options: &SpacingOptions,
+    ) -> Result<Self, SpacingError> {
+        Self::build(surface, map, map, faces, options)
+    }
+
+    /// The indexes of the map `lift` answers in (a spread field's image too, see
+    /// [`Lift::spread`]: its folds are the located map's, not its image's).
+    pub fn on(lift: &Lift<'a>, faces: &'a FaceTree, options: &SpacingOptions) -> Result<Self, SpacingError> {
+        Self::build(lift.surface(), lift.map(), lift.base_map(), faces, options)
+    }
+
+    /// The indexes of `map`, with the folds of `located` (the same vertices; `map` itself but
+    /// for a spread field, whose P1 image folds wherever the warp turns faster than the faces
+    /// though the lift does not).
+    fn build(
+        surface: &'a Surface,
+        map: &'a SlitMap,
+        located: &SlitMap,
         faces: &'a FaceTree,
         options: &SpacingOptions,
     ) -> Result<Self, SpacingError> {
@@ -313,7 +335,7 @@ impl<'a> SpacingIndex<'a> {
                 sag: 1e-6 * s.radius.max(1e-3),
             })
             .collect();
-        let mut forbidden: Vec<(f64, f64)> = map
+        let mut forbidden: Vec<(f64, f64)> = located
             .flipped_faces()
             .into_iter()
             .map(|f| {
@@ -545,6 +567,15 @@ impl<'a> Spacer<'a> {
         let (r, h) = (self.ball, self.options.scallop_mm * GATE_FRACTION);
         let mut lo = lo;
         let (mut lower, mut bad) = first;
+        if self.lift.is_spread() {
+            // The gate lays its points in the spread field's P1 image, which is not where the
+            // lift puts the rings: a point laid in this band may lie in the next (cut by a ring
+            // not tested here). Only those the lift puts in the band count.
+            for p in &mut bad {
+                self.gate.relabel(p, self.lift);
+            }
+            bad.retain(|p| p.2 < hi && p.2 > lo);
+        }
         for round in 1.. {
             if bad.is_empty() {
                 return Ok((lo, lower));
@@ -597,7 +628,14 @@ impl<'a> Spacer<'a> {
         lower: gate::RingLine,
     ) -> Result<(gate::RingLine, Vec<gate::GatePoint>), SpacingError> {
         let h = self.options.scallop_mm * GATE_FRACTION;
-        let bad = self.gate.uncut(lo, hi, &gate::Cutter::new(&ring_lines(upper, &lower), self.ball, h));
+        // In a spread field the gate lays its points in the warp's P1 image, which is not where
+        // the lift puts them: a band of the image is not the band of the rings. So the band is
+        // laid three band widths wider on either side, and what is uncut relabelled exactly
+        // ([`Spacer::gated`]): one left gen043 and gen056 of the sweep at 1.02 and 1.05 h on
+        // fresh samples, two gen000 at 1.15 h, between the points laid.
+        let pad = if self.lift.is_spread() { SPREAD_GATE_PAD * (hi - lo) } else { 0.0 };
+        let (a, b) = (lo - pad, hi + pad);
+        let bad = self.gate.uncut(a, b, &gate::Cutter::new(&ring_lines(upper, &lower), self.ball, h));
         Ok((lower, bad))
     }
 

@@ -25,7 +25,7 @@ use wasm_bindgen::JsCast;
 use crate::gcode::Post;
 use crate::mesh::{self, MeshOptions, MeshOutput};
 use crate::origin::{EnergyEvaluator, OriginChoice, OriginOptions};
-use crate::plan::{Facets, Optimise, Plan, PlanOptions, Planner as Core};
+use crate::plan::{Facets, Optimise, Plan, PlanOptions, Planner as Core, RingSpread};
 use crate::slitmap::SlitMap;
 use crate::spiral::{Cut, Direction};
 use crate::toolpath::Axes;
@@ -164,6 +164,7 @@ struct JsPlanOptions {
     facets: Option<Facets>,
     optimise: Option<Optimise>,
     alpha: Option<f64>,
+    spread: Option<RingSpread>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -175,7 +176,7 @@ enum JsOrigin {
 }
 
 impl JsPlanOptions {
-    const FIELDS: [&'static str; 18] = [
+    const FIELDS: [&'static str; 19] = [
         "radiusMm",
         "scallopMm",
         "axes",
@@ -194,6 +195,7 @@ impl JsPlanOptions {
         "facets",
         "optimise",
         "alpha",
+        "spread",
     ];
 
     fn parse(options: JsValue) -> Result<PlanOptions, JsError> {
@@ -247,6 +249,7 @@ impl JsPlanOptions {
             facets: js.facets.unwrap_or(d.facets),
             optimise: js.optimise.unwrap_or(d.optimise),
             alpha: js.alpha.unwrap_or(d.alpha),
+            spread: js.spread.unwrap_or(d.spread),
         })
     }
 }
@@ -410,7 +413,7 @@ impl Planner {
 
     /// Plans with `options` (see `JsPlanOptions`: radiusMm, scallopMm, axes, leadDeg, tiltDeg,
     /// direction, cut, origin, post, feedMmMin, plungeFeedMmMin, spindleRpm, safeZMm,
-    /// verifySamples, partName, facets, optimise, alpha) and returns the plan report (the CLI's `--report` object).
+    /// verifySamples, partName, facets, optimise, alpha, spread) and returns the plan report (the CLI's `--report` object).
     /// `on_progress(stage, done, total)` is called as each stage starts.
     pub fn plan(&mut self, options: JsValue, on_progress: Option<js_sys::Function>) -> Result<JsValue, JsError> {
         let options = JsPlanOptions::parse(options)?;

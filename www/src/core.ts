@@ -121,6 +121,12 @@ export interface PlanOptions {
   optimise?: "tpsfo" | "none";
   /** Seed 003's α on the paper's scale: larger gives smoother, longer paths. Default 10. */
   alpha?: number;
+  /**
+   * "none" (default): every meridian of the field gets the rings its worst one needs. "need":
+   * a path whose rings are spread by each meridian's own need is planned too, and written when
+   * it is shorter at the same finish (planning takes three to six times as long).
+   */
+  spread?: "none" | "need";
 }
 
 /** What seed 003's optimisation did (the report's `optimise` section). */
@@ -156,6 +162,19 @@ export interface SpacingRetry {
   kept: boolean;
 }
 
+/** With `spread: "need"`: the spread field's path against the other (the report's `spread`). */
+export interface SpreadSummary {
+  /** Whether the spread field's path was written (it keeps h and is shorter, or the other does not keep h). */
+  kept: boolean;
+  /** The spread field's path: length and largest scallop over h (null when its plan failed: see `error`). */
+  length_mm: number | null;
+  max_over_h: number | null;
+  /** The path without the spread. */
+  unspread_length_mm: number;
+  unspread_max_over_h: number;
+  error?: string;
+}
+
 /** The plan report: the CLI's `--report` JSON. */
 export interface PlanReport {
   options: Record<string, unknown>;
@@ -176,6 +195,8 @@ export interface PlanReport {
   optimise?: OptimiseReport;
   /** Paths whose own verification left more than h outside the facet valleys, spaced again for a smaller cusp (absent when the first kept h). */
   spacing_retries?: SpacingRetry[];
+  /** Present with `spread: "need"`. */
+  spread?: SpreadSummary;
   path: {
     length_mm: number;
     /** The length over the flat-plate bound area / (2·√(2Rh)). */

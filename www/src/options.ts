@@ -27,6 +27,7 @@ const PARAM: Record<Key, string> = {
   facets: "facets",
   optimise: "optimise",
   alpha: "alpha",
+  spread: "spread",
 };
 
 const CHOICES = {
@@ -36,6 +37,7 @@ const CHOICES = {
   post: ["linuxcnc", "grbl", "ac", "cl"],
   facets: ["exact", "smooth"],
   optimise: ["tpsfo", "none"],
+  spread: ["none", "need"],
 } as const;
 
 /** "auto" | "centroid" | "hole:N" | "x,y" (flattened plane) | "x,y,z" (3D point). */
@@ -150,6 +152,6 @@ export function cliArguments(options: FullPlanOptions): string[] {
   args.push("--origin", originToText(options.origin), "--direction", options.direction);
   args.push("--feed", String(options.feedMmMin), "--spindle", String(options.spindleRpm));
   if (options.safeZMm !== null) args.push("--safe-z", String(options.safeZMm));
-  args.push("--facets", options.facets, "--optimise", options.optimise, "--alpha", String(options.alpha));
+  args.push("--facets", options.facets, "--optimise", options.optimise, "--alpha", String(options.alpha), "--spread", options.spread);
   return args;
 }

@@ -4,7 +4,7 @@ use glam::{DVec2, DVec3};
 use slitpath::gcode::Post;
 use slitpath::mesh::{self, MeshOptions};
 use slitpath::origin::OriginChoice;
-use slitpath::plan::{Facets, Optimise, PlanOptions, Planner};
+use slitpath::plan::{Facets, Optimise, PlanOptions, Planner, RingSpread};
 use slitpath::spiral::{Cut, Direction};
 use slitpath::step::StepOptions;
 use slitpath::toolpath::Axes;
@@ -31,6 +31,7 @@ pub struct Args<'a> {
     pub facets: &'a str,
     pub optimise: &'a str,
     pub alpha: f64,
+    pub spread: &'a str,
 }
 
 pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
@@ -60,6 +61,11 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         "none" => Optimise::None,
         o => return Err(format!("--optimise `{o}`: use tpsfo or none")),
     };
+    let spread = match a.spread {
+        "need" => RingSpread::Need,
+        "none" => RingSpread::None,
+        s => return Err(format!("--spread `{s}`: use need or none")),
+    };
     let part_name = a.part.file_stem().map_or("part".into(), |s| s.to_string_lossy().into_owned());
     Ok(PlanOptions {
         radius_mm: a.radius,
@@ -78,6 +84,7 @@ pub fn options(a: Args<'_>) -> Result<PlanOptions, String> {
         facets,
         optimise,
         alpha: a.alpha,
+        spread,
     })
 }
 

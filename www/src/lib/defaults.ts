@@ -22,6 +22,7 @@ export const DEFAULT_PLAN_OPTIONS: Readonly<FullPlanOptions> = Object.freeze({
   facets: "exact",
   optimise: "tpsfo",
   alpha: 10,
+  spread: "none",
 });
 
 /**

@@ -18,6 +18,7 @@ function rows(plan: PlanResult, limit: number): Row[] {
   const rejected = origin.rejected?.length ?? 0;
   const optimise = report.optimise;
   const retry = report.spacing_retries?.at(-1);
+  const spread = report.spread;
   return [
     ["metric-rings", "Rings", n0.format(plan.ringRadii.length)],
     // Only when the first path's own verification left more than h (src/plan/paths.rs).
@@ -47,6 +48,20 @@ function rows(plan: PlanResult, limit: number): Row[] {
           : `conformal circles: ${optimise.fallback ?? "the optimised field was not used"}`,
       optimise !== undefined && optimise.path_field !== "tpsfo",
     ],
+    // Only with `spread: "need"`: both paths' lengths, and which one was written.
+    ...(spread === undefined
+      ? []
+      : [
+          [
+            "metric-spread",
+            "Ring spread",
+            spread.length_mm === null
+              ? `not planned: ${spread.error ?? "failed"}`
+              : `${spread.kept ? "kept" : "not kept"}: ${n1.format(spread.length_mm)} mm against ${n1.format(spread.unspread_length_mm)} mm` +
+                ` (${n3.format(spread.max_over_h ?? 0)} h against ${n3.format(spread.unspread_max_over_h)} h)`,
+            !spread.kept,
+          ] satisfies Row,
+        ]),
     ["metric-time", "Cutting time", minutes < 1 ? `${n0.format(minutes * 60)} s` : `${n1.format(minutes)} min`],
     ["metric-retractions", "Retractions", n0.format(path.retractions), path.retractions > 0],
     ["metric-max-turn", "Sharpest turn", `${n1.format(path.max_turn_deg)}°`],

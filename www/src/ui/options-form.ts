@@ -8,7 +8,7 @@ import { el } from "./dom";
 import { fieldRow, readFields, type FieldInput } from "./fields";
 
 type NumberKey = "radiusMm" | "scallopMm" | "leadDeg" | "tiltDeg" | "feedMmMin" | "plungeFeedMmMin" | "spindleRpm" | "safeZMm" | "verifySamples" | "alpha";
-type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets" | "optimise";
+type ChoiceKey = "axes" | "direction" | "cut" | "post" | "facets" | "optimise" | "spread";
 
 interface NumberField { key: NumberKey; id: string; label: string; unit: string; step: string; optional?: boolean; fiveAxis?: boolean }
 interface ChoiceField { key: ChoiceKey; id: string; label: string; choices: [string, string][] }
@@ -24,6 +24,7 @@ const TOOL: (NumberField | ChoiceField)[] = [
   { key: "facets", id: "facets", label: "Facets", choices: [["exact", "exact (the STL is the part)"], ["smooth", "smooth (a tessellated smooth surface)"]] },
   { key: "optimise", id: "optimise", label: "Rings", choices: [["tpsfo", "optimised field (seed 003, shorter)"], ["none", "conformal circles (seed 000)"]] },
   { key: "alpha", id: "alpha", label: "Smoothness α", unit: "", step: "1" },
+  { key: "spread", id: "spread", label: "Ring spread", choices: [["none", "as the field's levels"], ["need", "by each meridian's need (also plans that, keeps the shorter)"]] },
 ];
 const MACHINE: (NumberField | ChoiceField)[] = [
   { key: "post", id: "post", label: "Post", choices: [["linuxcnc", "LinuxCNC (3-axis)"], ["grbl", "GRBL (3-axis)"], ["ac", "5-axis AC table-table (TCP)"], ["cl", "CL data (APT)"]] },
