@@ -257,6 +257,8 @@ fn gen013_rings_spread_by_each_meridians_need_are_shorter_at_the_same_finish() {
     assert!(p.report.path.length_mm <= 0.88 * spread.unspread_length_mm, "{spread:?}");
     assert_eq!(spread.length_mm, Some(p.report.path.length_mm));
     assert_eq!(p.report.path.retractions, 1, "one continuous spiral");
+    // The gate's points of other bands, laid by its wide bands, are not counted against a ring.
+    assert_eq!(p.report.gate_compromises, 0);
     assert!(p.gcode.contains("spread by each meridian's need"), "the header names the field");
     let fresh = plan::PlanOptions { verify_samples: 200_000, ..options };
     let v = planner.verify(&p.toolpath, &fresh, slitpath::bench::FRESH_SEED).expect("verified");

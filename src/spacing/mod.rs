@@ -567,22 +567,24 @@ impl<'a> Spacer<'a> {
         let (r, h) = (self.ball, self.options.scallop_mm * GATE_FRACTION);
         let mut lo = lo;
         let (mut lower, mut bad) = first;
-        if self.lift.is_spread() {
-            // The gate lays its points in the spread field's P1 image, which is not where the
-            // lift puts the rings: a point laid in this band may lie in the next (cut by a ring
-            // not tested here). Only those the lift puts in the band count.
-            for p in &mut bad {
-                self.gate.relabel(p, self.lift);
-            }
-            bad.retain(|p| p.2 < hi && p.2 > lo);
-        }
         for round in 1.. {
+            if self.lift.is_spread() {
+                // The gate lays a spread field's bands wide, in the warp's P1 image ([`Spacer::
+                // gate_test`]): of what it leaves uncut, only what the lift puts in this band
+                // is this ring's to cut (the rest lies in other bands, cut by their rings).
+                for p in &mut bad {
+                    self.gate.relabel(p, self.lift);
+                }
+                bad.retain(|p| p.2 < hi && p.2 > lo);
+            }
             if bad.is_empty() {
                 return Ok((lo, lower));
             }
             // Each at the radius of the ring through it as the lift sees it (the top below).
-            for p in &mut bad {
-                self.gate.relabel(p, self.lift);
+            if !self.lift.is_spread() {
+                for p in &mut bad {
+                    self.gate.relabel(p, self.lift);
+                }
             }
             // Points on ring k's own line (the rim, for the first ring) are its to cut: ring
             // k + 1 moved onto it would cut them no better and make no progress (the band was
