@@ -1,7 +1,7 @@
 //! The plan report (`slitpath plan --report`, the page's figures) and the G-code header: what a
 //! plan tells its user besides the path. Plain data built from the stages' outputs.
 
-use super::{Facets, PlanOptions, Planner, RejectedPole, SpacingRetry, SpreadSummary, Timings};
+use super::{Facets, PlanOptions, Planner, RejectedPole, RingSpread, SpacingRetry, SpreadSummary, Timings};
 use crate::flatten::FlattenReport;
 use crate::mesh::creases::FacetValleys;
 use crate::mesh::{MeshReport, Surface};
@@ -75,6 +75,7 @@ pub struct OptionsReport {
     pub safe_z_mm: Option<f64>,
     pub verify_samples: usize,
     pub facets: Facets,
+    pub spread: RingSpread,
 }
 
 impl OptionsReport {
@@ -99,6 +100,7 @@ impl OptionsReport {
             safe_z_mm: o.safe_z_mm,
             verify_samples: o.verify_samples,
             facets: o.facets,
+            spread: o.spread,
         }
     }
 }

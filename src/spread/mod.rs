@@ -12,7 +12,7 @@
 //! where a P1 field rounds them off (docs/optimise.md, limit 2).
 //!
 //! # What it computes
-//! On each of a few thousand meridians θ_j of the field (even along the outer loop's 3D length,
+//! On each of about 1 800 meridians θ_j of the field (even along the outer loop's 3D length,
 //! and evenly in angle) the cumulative need from the rim inward, N_j(ρ) = ∫ ds / w(s), with w =
 //! 2√(2Rh) the flat-plate stepover of the user's R and h (so N counts ideal rings), along the
 //! lifted meridian; then g_j(ρ) = N_j(ρ) / N_j(r_min), smoothed over neighbouring meridians.
