@@ -40,7 +40,9 @@
 //! # Entry points
 //! [`spacing`] (one-off); [`spacing_on`] with the map's [`Lift`] built once for the spacing and
 //! the spiral; [`SpacingIndex`] (the map's indexes, which need no lift, built beside it) and
-//! [`SpacingIndex::rings`]. The three give the same rings.
+//! [`SpacingIndex::rings`]. The three give the same rings. A spread field ([`crate::spread`],
+//! lifted through [`Lift::spread`]) is indexed from its lift ([`SpacingIndex::on`]): its rings
+//! are circles of the warped field, and its gate lays each band wider (see `gate_test`).
 //!
 //! # Preconditions
 //! A slit map of the surface (same vertices), ball radius R > 0, 0 < h < R.
@@ -569,9 +571,9 @@ impl<'a> Spacer<'a> {
         let (mut lower, mut bad) = first;
         for round in 1.. {
             if self.lift.is_spread() {
-                // The gate lays a spread field's bands wide, in the warp's P1 image ([`Spacer::
-                // gate_test`]): of what it leaves uncut, only what the lift puts in this band
-                // is this ring's to cut (the rest lies in other bands, cut by their rings).
+                // The gate lays a spread field's bands wide, in the warp's P1 image (see
+                // `gate_test`): of what it leaves uncut, only what the lift puts in this band is
+                // this ring's to cut (the rest lies in other bands, cut by their rings).
                 for p in &mut bad {
                     self.gate.relabel(p, self.lift);
                 }
