@@ -285,6 +285,19 @@ pub fn planning_surface(surface: &Surface) -> Surface {
     refine_hole_rims(surface, &RefineOptions::default())
 }
 
+/// Unit tests' fixture: the planner's surface of `part` and its slit map at the centroid pole.
+#[cfg(test)]
+pub(crate) fn mapped_at_centroid(part: &crate::mesh::TriMesh) -> (Surface, SlitMap) {
+    let surface = crate::mesh::from_triangles(part, &Default::default()).expect("a valid fixture").surface;
+    let surface = planning_surface(&surface);
+    let flat =
+        crate::flatten::flatten(crate::flatten::FlattenInput::from(&surface), &Default::default()).expect("flattened");
+    let domain = PlanarDomain::of_surface(&surface, flat.uv);
+    let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).expect("factorised");
+    let map = solver.map(crate::origin::centroid_pole(&domain)).expect("mapped");
+    (surface, map)
+}
+
 impl Planner {
     /// Refines the hole rims ([`crate::mesh::refine`]; `surface` is then the refined surface, the
     /// part's vertices first), flattens it and factorises the slit map once; beside those, the

@@ -54,7 +54,7 @@ pub struct Lift<'a> {
     vertex_faces: Vec<u32>,
     /// With [`Lift::spread`]: the map located in (`map` is then its image under the warp).
     base: &'a SlitMap,
-    spread: Option<std::sync::Arc<Spread>>,
+    spread: Option<Spread>,
 }
 
 impl<'a> Lift<'a> {
@@ -77,7 +77,7 @@ impl<'a> Lift<'a> {
     /// warp is exact however sharply it turns; `image` ([`Spread::image`]) is what
     /// [`Lift::map`] returns from then on.
     pub fn spread(self, image: &'a SlitMap, spread: Spread) -> Self {
-        Self { map: image, spread: Some(std::sync::Arc::new(spread)), ..self }
+        Self { map: image, spread: Some(spread), ..self }
     }
 
     /// Whether queries are in a spread field ([`Lift::spread`]).
@@ -628,20 +628,10 @@ fn surely_outside(t: [DVec2; 3], q: DVec2) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flatten::{self, FlattenInput, FlattenOptions};
-    use crate::mesh::{self, MeshOptions};
-    use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
 
     /// The planner's surface of a fixture and its slit map at the centroid pole.
     fn mapped(name: &str) -> (Surface, SlitMap) {
-        let part = crate::fixtures::by_name(name).expect("a fixture");
-        let surface = mesh::from_triangles(&part, &MeshOptions::default()).expect("a valid fixture").surface;
-        let surface = crate::plan::planning_surface(&surface);
-        let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default()).expect("flattened");
-        let domain = PlanarDomain::of_surface(&surface, flat.uv);
-        let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).expect("factorised");
-        let map = solver.map(crate::origin::centroid_pole(&domain)).expect("mapped");
-        (surface, map)
+        crate::plan::mapped_at_centroid(&crate::fixtures::by_name(name).expect("a fixture"))
     }
 
     /// Lifts the circle |w| = rho at `n` angles, each from the previous point's face, and returns

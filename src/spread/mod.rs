@@ -340,6 +340,7 @@ impl Spread {
             // Any meridian over the slit gives the pinned radius.
             s.radius = self.forward(s.theta_start, s.radius);
         }
+        let circles: Vec<(usize, f64)> = out.slits.iter().map(|s| (s.hole, s.radius)).collect();
         let mut snap = |l: usize, radius: f64| {
             for &v in &surface.loops[l] {
                 let w = &mut out.w[v as usize];
@@ -347,8 +348,8 @@ impl Spread {
             }
         };
         snap(0, 1.0);
-        for s in &map.slits {
-            snap(s.hole, self.forward(s.theta_start, s.radius));
+        for (hole, radius) in circles {
+            snap(hole, radius);
         }
         if let Mode::Annulus { hole, inner_radius } = map.mode {
             snap(hole, inner_radius);

@@ -1,19 +1,6 @@
 use super::*;
-use crate::flatten::{self, FlattenInput, FlattenOptions};
-use crate::mesh::{self, MeshOptions, TriMesh};
-use crate::slitmap::{PlanarDomain, SlitMapOptions, SlitMapSolver};
+use crate::plan::mapped_at_centroid as mapped;
 use std::f64::consts::PI;
-
-/// The surface of `part` and its slit map from the centroid pole.
-fn mapped(part: &TriMesh) -> (Surface, SlitMap) {
-    let surface = mesh::from_triangles(part, &MeshOptions::default()).expect("a valid fixture").surface;
-    let surface = crate::plan::planning_surface(&surface);
-    let flat = flatten::flatten(FlattenInput::from(&surface), &FlattenOptions::default()).expect("flattened");
-    let domain = PlanarDomain::of_surface(&surface, flat.uv);
-    let solver = SlitMapSolver::new(&domain, &SlitMapOptions::default()).expect("factorised");
-    let map = solver.map(crate::origin::centroid_pole(&domain)).expect("mapped");
-    (surface, map)
-}
 
 fn options() -> SpreadOptions {
     SpreadOptions { radius_mm: 1.0, scallop_mm: 0.01, ..SpreadOptions::default() }
