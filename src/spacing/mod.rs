@@ -59,6 +59,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod chain;
+mod cutter;
 mod facets;
 mod features;
 mod gate;
@@ -279,9 +280,6 @@ const CLUSTER: usize = 32;
 
 /// The gate tests its points at this fraction of h (the rest covers the spiral's chords).
 const GATE_FRACTION: f64 = 0.95;
-/// In a spread field the gate lays the band this many band widths wider on each side (see
-/// [`Spacer::gate_test`]).
-const SPREAD_GATE_PAD: f64 = 3.0;
 /// Rounds of moving a ring up before the gate gives in (reported).
 const GATE_ROUNDS: usize = 4;
 /// Bisection steps per round.
@@ -299,22 +297,22 @@ impl<'a> SpacingIndex<'a> {
         faces: &'a FaceTree,
         options: &SpacingOptions,
     ) -> Result<Self, SpacingError> {
-        Self::build(surface, map, map, faces, options)
+        Self::build(surface, map, None, faces, options)
     }
 
     /// The indexes of the map `lift` answers in (a spread field's image too, see
     /// [`Lift::spread`]: its folds are the located map's, not its image's).
     pub fn on(lift: &Lift<'a>, faces: &'a FaceTree, options: &SpacingOptions) -> Result<Self, SpacingError> {
-        Self::build(lift.surface(), lift.map(), lift.base_map(), faces, options)
+        Self::build(lift.surface(), lift.map(), lift.is_spread().then_some(lift), faces, options)
     }
 
-    /// The indexes of `map`, with the folds of `located` (the same vertices; `map` itself but
-    /// for a spread field, whose P1 image folds wherever the warp turns faster than the faces
-    /// though the lift does not).
+    /// The indexes of `map`; for a spread field, `spread` is its lift: the folds are those of
+    /// the map it locates in (the warp's P1 image folds wherever the warp turns faster than the
+    /// faces, though the lift does not), and the gate labels its points through it.
     fn build(
         surface: &'a Surface,
         map: &'a SlitMap,
-        located: &SlitMap,
+        spread: Option<&Lift<'_>>,
         faces: &'a FaceTree,
         options: &SpacingOptions,
     ) -> Result<Self, SpacingError> {
@@ -337,7 +335,8 @@ impl<'a> SpacingIndex<'a> {
                 sag: 1e-6 * s.radius.max(1e-3),
             })
             .collect();
-        let mut forbidden: Vec<(f64, f64)> = located
+        let mut forbidden: Vec<(f64, f64)> = spread
+            .map_or(map, |lift| lift.base_map())
             .flipped_faces()
             .into_iter()
             .map(|f| {
@@ -360,7 +359,7 @@ impl<'a> SpacingIndex<'a> {
         // Independent indexes of the same map, built side by side.
         let ((corners, creases), gate) = crate::par::join(
             || (corner_angles(surface, map), creases(surface, map)),
-            || gate::Gate::new(surface, map, faces, options.radius_mm, lift_h),
+            || gate::Gate::new(surface, map, gate::Labels(spread), faces, options.radius_mm, lift_h),
         );
         Ok(Self { surface, map, options: options.clone(), gate, slits, lift_h, corners, creases, forbidden: merged })
     }
@@ -412,7 +411,7 @@ impl<'a> Spacer<'a> {
         let mut rings: Vec<Ring> = Vec::new();
         let mut last_step: Option<f64> = None;
         // Ring k's ball-centre polyline, for the gate of the band below it.
-        let mut upper: Option<gate::RingLine> = None;
+        let mut upper: Option<cutter::RingLine> = None;
         // The band below a ring, made beside its gate (see below).
         let mut ahead: Option<(f64, BandMade)> = None;
         loop {
@@ -563,26 +562,18 @@ impl<'a> Spacer<'a> {
         &mut self,
         hi: f64,
         lo: f64,
-        upper: Option<&gate::RingLine>,
-        first: (gate::RingLine, Vec<gate::GatePoint>),
-    ) -> Result<(f64, gate::RingLine), SpacingError> {
+        upper: Option<&cutter::RingLine>,
+        first: (cutter::RingLine, Vec<gate::GatePoint>),
+    ) -> Result<(f64, cutter::RingLine), SpacingError> {
         let (r, h) = (self.ball, self.options.scallop_mm * GATE_FRACTION);
         let mut lo = lo;
         let (mut lower, mut bad) = first;
         for round in 1.. {
-            if self.lift.is_spread() {
-                // The gate lays a spread field's bands wide, in the warp's P1 image (see
-                // `gate_test`): of what it leaves uncut, only what the lift puts in this band is
-                // this ring's to cut (the rest lies in other bands, cut by their rings).
-                for p in &mut bad {
-                    self.gate.relabel(p, self.lift);
-                }
-                bad.retain(|p| p.2 < hi && p.2 > lo);
-            }
             if bad.is_empty() {
                 return Ok((lo, lower));
             }
-            // Each at the radius of the ring through it as the lift sees it (the top below).
+            // Each at the radius of the ring through it as the lift sees it (the top below; a
+            // spread field's gate labelled its points so, see `gate::Labels`).
             if !self.lift.is_spread() {
                 for p in &mut bad {
                     self.gate.relabel(p, self.lift);
@@ -604,7 +595,9 @@ impl<'a> Spacer<'a> {
                 let mid = 0.5 * (ok + no);
                 let centres = self.centres(mid, Some(&focus))?;
                 // With a margin: the band's next points lie beside these.
-                if gate::Cutter::new(&ring_lines(upper, &centres), r, GATE_BISECTION_MARGIN * h).uncut(&bad).is_empty()
+                if cutter::Cutter::new(&ring_lines(upper, &centres), r, GATE_BISECTION_MARGIN * h)
+                    .uncut(&bad)
+                    .is_empty()
                 {
                     ok = mid;
                 } else {
@@ -628,18 +621,13 @@ impl<'a> Spacer<'a> {
         &self,
         hi: f64,
         lo: f64,
-        upper: Option<&gate::RingLine>,
-        lower: gate::RingLine,
-    ) -> Result<(gate::RingLine, Vec<gate::GatePoint>), SpacingError> {
+        upper: Option<&cutter::RingLine>,
+        lower: cutter::RingLine,
+    ) -> Result<(cutter::RingLine, Vec<gate::GatePoint>), SpacingError> {
         let h = self.options.scallop_mm * GATE_FRACTION;
-        // In a spread field the gate lays its points in the warp's P1 image, which is not where
-        // the lift puts them: a band of the image is not the band of the rings. So the band is
-        // laid three band widths wider on either side, and what is uncut relabelled exactly
-        // ([`Spacer::gated`]): one left gen043 and gen056 of the sweep at 1.02 and 1.05 h on
-        // fresh samples, two gen000 at 1.15 h, between the points laid.
-        let pad = if self.lift.is_spread() { SPREAD_GATE_PAD * (hi - lo) } else { 0.0 };
-        let (a, b) = (lo - pad, hi + pad);
-        let bad = self.gate.uncut(a, b, &gate::Cutter::new(&ring_lines(upper, &lower), self.ball, h));
+        let lines = ring_lines(upper, &lower);
+        let cutter = cutter::Cutter::new(&lines, self.ball, h);
+        let bad = self.gate.uncut(lo, hi, gate::Labels(self.lift.is_spread().then_some(self.lift)), &cutter);
         Ok((lower, bad))
     }
 
@@ -665,7 +653,7 @@ impl<'a> Spacer<'a> {
     /// roof_ridge's 60° ridge). With `focus`, only the steps within 3R of one of its points are
     /// refined: the others are farther than R from any point beside them, so they cut none of
     /// them.
-    fn centres(&self, rho: f64, focus: Option<&[DVec3]>) -> Result<gate::RingLine, SpacingError> {
+    fn centres(&self, rho: f64, focus: Option<&[DVec3]>) -> Result<cutter::RingLine, SpacingError> {
         const M: usize = 256;
         // Lifted as the spiral lifts the ring, each point near the face of the one before: where
         // the P1 image overlaps itself (below a slit tip) the nearest-image lift can pick a face
@@ -754,7 +742,7 @@ impl<'a> Spacer<'a> {
             out.pop(); // the next step's start
             Ok(out)
         })?;
-        let mut line = gate::RingLine::new(rho);
+        let mut line = cutter::RingLine::new(rho);
         for (t, c) in pieces.into_iter().flatten() {
             line.push(t, c);
         }
@@ -764,6 +752,6 @@ impl<'a> Spacer<'a> {
 }
 
 /// Ring k's centres (none above the first ring) and the ring below.
-fn ring_lines<'b>(upper: Option<&'b gate::RingLine>, lower: &'b gate::RingLine) -> Vec<&'b gate::RingLine> {
+fn ring_lines<'b>(upper: Option<&'b cutter::RingLine>, lower: &'b cutter::RingLine) -> Vec<&'b cutter::RingLine> {
     upper.into_iter().chain([lower]).collect()
 }

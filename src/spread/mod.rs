@@ -102,6 +102,44 @@ pub struct Spread {
     rows: Vec<f64>,
     /// g[j][k] on meridian j at row k: 1 at r_min, 0 at the rim, decreasing in k.
     g: Vec<Vec<f64>>,
+    /// `thetas` and `rows` bucketed, for the lift's many queries.
+    theta_buckets: Buckets,
+    row_buckets: Buckets,
+}
+
+/// An ascending list's `partition_point(|x| x <= t)` over [lo, hi], from buckets: where each
+/// bucket's start falls in the list, so that only the values within one bucket of `t` are
+/// searched. The same answer as the list's own binary search (the [`crate::spacing::Lift`] of a
+/// spread field asks it twice per query; as a binary search over the 1 800 meridians it took 7 %
+/// of planning the 40k panel).
+#[derive(Debug, Clone, PartialEq)]
+struct Buckets {
+    lo: f64,
+    per: f64,
+    /// `first[b]`: how many values are ≤ the start of bucket b.
+    first: Vec<u32>,
+}
+
+impl Buckets {
+    fn new(values: &[f64], lo: f64, hi: f64, count: usize) -> Self {
+        let per = count as f64 / (hi - lo);
+        let first = (0..=count).map(|b| values.partition_point(|&x| x <= lo + b as f64 / per) as u32).collect();
+        Self { lo, per, first }
+    }
+
+    fn partition_point(&self, values: &[f64], t: f64) -> usize {
+        let b = ((t - self.lo) * self.per).floor();
+        let last = self.first.len() - 1;
+        // A bucket of margin on each side: t's bucket as computed may be off by rounding.
+        let (a, z) = if b >= 1.0 && b < last as f64 {
+            let b = b as usize;
+            (self.first[b - 1] as usize, self.first[(b + 2).min(last)] as usize)
+        } else {
+            (0, values.len())
+        };
+        let z = if b + 2.0 >= last as f64 { values.len() } else { z };
+        a + values[a..z].partition_point(|&x| x <= t)
+    }
 }
 
 fn check(o: &SpreadOptions) -> Result<(), SpreadError> {
@@ -145,7 +183,9 @@ pub fn spread(lift: &Lift<'_>, options: &SpreadOptions) -> Result<Spread, Spread
     let needs = crate::par::each(thetas.len(), |j| need(lift, thetas[j], &rows, per_mm));
     // g: the need normalised to 1 at the inner end of each meridian.
     let raw: Vec<Vec<f64>> = needs.iter().map(|n| n.iter().map(|&x| x / n[0]).collect()).collect();
-    let mut spread = Spread { r_min, thetas, rows, g: smooth(&raw, options.smoothing) };
+    let theta_buckets = Buckets::new(&thetas, 0.0, TAU, 4 * thetas.len());
+    let row_buckets = Buckets::new(&rows, r_min, 1.0, 4 * rows.len());
+    let mut spread = Spread { r_min, thetas, rows, g: smooth(&raw, options.smoothing), theta_buckets, row_buckets };
     spread.pin(map, options.pin_fade_rad);
     Ok(spread)
 }
@@ -272,7 +312,7 @@ impl Spread {
     fn row_at(&self, rho: f64) -> (usize, f64) {
         let last = self.rows.len() - 1;
         let rho = rho.clamp(self.r_min, 1.0);
-        let k = self.rows.partition_point(|&r| r <= rho).clamp(1, last) - 1;
+        let k = self.row_buckets.partition_point(&self.rows, rho).clamp(1, last) - 1;
         let (a, b) = (self.rows[k], self.rows[k + 1]);
         (k, if b > a { ((rho - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 })
     }
@@ -281,7 +321,7 @@ impl Spread {
     fn columns_at(&self, theta: f64) -> (usize, usize, f64) {
         let theta = crate::num::rem_tau(theta);
         let n = self.thetas.len();
-        let k = self.thetas.partition_point(|&x| x <= theta);
+        let k = self.theta_buckets.partition_point(&self.thetas, theta);
         let (j0, j1) = ((k + n - 1) % n, k % n);
         let (t0, mut t1) = (self.thetas[j0], self.thetas[j1]);
         let mut x = theta;

@@ -108,3 +108,21 @@ fn bad_options_are_named() {
         assert!(matches!(spread(&lift, &bad), Err(SpreadError::InvalidOption(_))), "{bad:?}");
     }
 }
+
+#[test]
+fn the_buckets_find_what_the_binary_search_finds() {
+    let mut rng = crate::fixtures::SplitMix64(7);
+    // Clustered values (as the meridians are round a rectangle's corners), with repeats.
+    let mut values: Vec<f64> = (0..500).map(|_| TAU * rng.unit().powi(3)).collect();
+    values.extend([0.0, 1.0, 1.0, TAU - 1e-12]);
+    values.sort_by(f64::total_cmp);
+    let buckets = Buckets::new(&values, 0.0, TAU, 64);
+    let mut queries: Vec<f64> = (0..20_000).map(|_| 7.0 * rng.unit() - 0.3).collect();
+    // On the values, on the buckets' starts, outside the range, NaN.
+    queries.extend(values.iter().copied());
+    queries.extend((0..=64).map(|b| b as f64 * TAU / 64.0));
+    queries.extend([-1.0, TAU, 10.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY]);
+    for t in queries {
+        assert_eq!(buckets.partition_point(&values, t), values.partition_point(|&x| x <= t), "t = {t}");
+    }
+}

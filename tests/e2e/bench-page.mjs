@@ -10,7 +10,8 @@
 // planner's memory after each. Figures only: nothing is asserted (tests/e2e/large-part.test.mjs
 // holds the test thresholds).
 //
-// SLITPATH_BENCH_PAGE=40k runs only the cases whose name contains it.
+// SLITPATH_BENCH_PAGE=40k runs only the cases whose name contains it; SLITPATH_BENCH_PAGE_SPREAD=need
+// plans with that ring spread (page and CLI).
 import { execFileSync } from "node:child_process";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
@@ -25,6 +26,7 @@ const CASES = [
 const STAGES = ["flatten", "slitmap", "origin", "optimise", "spacing", "spiral", "toolpath", "verify", "post", "total"];
 const TIMEOUT_MS = Number(process.env.SLITPATH_BENCH_PAGE_TIMEOUT ?? 300_000);
 const only = process.env.SLITPATH_BENCH_PAGE ?? "";
+const spread = process.env.SLITPATH_BENCH_PAGE_SPREAD ?? "none";
 
 const status = (page) => page.getByTestId("status").textContent();
 const waitPlanned = (page, timeout) =>
@@ -33,7 +35,8 @@ const waitPlanned = (page, timeout) =>
 /** The native CLI's stage timings (ms) on the same part and options, on one thread. */
 function native(file, scallop) {
   const report = join(output, "bench-native-report.json");
-  cli("plan", file, "--radius", "3", "--scallop", String(scallop), "-o", join(output, "bench-native.ngc"), "--report", report);
+  const args = ["plan", file, "--radius", "3", "--scallop", String(scallop), "--spread", spread];
+  cli(...args, "-o", join(output, "bench-native.ngc"), "--report", report);
   return JSON.parse(readFileSync(report, "utf8")).timings_ms;
 }
 
@@ -101,7 +104,7 @@ try {
     try {
       const page = await browser.context.newPage();
       await recordTimeline(page);
-      await page.goto(`${server.url}?scallop=${c.scallop}`);
+      await page.goto(`${server.url}?scallop=${c.scallop}&spread=${spread}`);
       await waitPlanned(page, 120_000);
       await page.getByTestId("stl-input").setInputFiles(file);
       let failed = "";
