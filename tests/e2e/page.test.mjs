@@ -86,6 +86,17 @@ describe("the planner page", { concurrency: false }, () => {
     assert.equal(await page.getByTestId("opt-scallop").inputValue(), "0.08");
   });
 
+  it("takes every option from a shared URL: the ring spread too", async () => {
+    await page.goto(`${server.url}?spread=need`);
+    assert.equal(await settled(), "planned");
+    assert.equal(await page.getByTestId("opt-spread").inputValue(), "need");
+    assert.equal(await page.getByTestId("opt-scallop").inputValue(), "0.08", "the stored options beneath");
+    assert.match(await page.getByTestId("metric-spread").textContent(), /^(not )?kept: [\d,.]+ mm against [\d,.]+ mm/);
+    await page.goto(`${server.url}?spread=none`);
+    assert.equal(await settled(), "planned");
+    assert.equal(await page.getByTestId("metric-spread").count(), 0);
+  });
+
   it("warns when the STL's facets alone leave more than h, and not otherwise (issue 34)", async () => {
     // A six-hole panel meshed at 3 mm: its concave creases and pits alone leave about 5.7 µm
     // for R 3, whatever the path.

@@ -64,13 +64,6 @@ function parse<K extends Key>(key: K, text: string): FullPlanOptions[K] | null {
     case "origin":
       value = originFromText(text);
       break;
-    case "direction":
-    case "cut":
-    case "post":
-    case "facets":
-    case "optimise":
-      value = (CHOICES[key as "direction" | "cut" | "post" | "facets" | "optimise"] as readonly string[]).includes(text) ? text : null;
-      break;
     case "axes":
       value = text === "3" ? 3 : text === "5" ? 5 : null;
       break;
@@ -79,7 +72,13 @@ function parse<K extends Key>(key: K, text: string): FullPlanOptions[K] | null {
       if (value === undefined) return null;
       return value as FullPlanOptions[K];
     default:
-      value = text.trim() !== "" && Number.isFinite(Number(text)) ? Number(text) : null;
+      // Every other choice by its list (a choice missing here was read as a number, and lost:
+      // `spread=need` was, in the URL and in localStorage).
+      if (key in CHOICES) {
+        value = (CHOICES[key as keyof typeof CHOICES] as readonly unknown[]).includes(text) ? text : null;
+      } else {
+        value = text.trim() !== "" && Number.isFinite(Number(text)) ? Number(text) : null;
+      }
   }
   return value as FullPlanOptions[K] | null;
 }
