@@ -22,8 +22,9 @@ pub(super) const LIFT_FREE: f64 = 0.03;
 /// A face's balls are certified free ([`face_lifts_free`]) when its own tilt and its sampled
 /// balls lift them by at most this fraction of the free lift.
 const FREE_SAMPLED: f64 = 0.5;
-/// Where [`face_lifts_free`] clears a face's balls: its corners, edge midpoints and centroid.
-const FREE_SAMPLES: [[f64; 3]; 7] = [
+/// A face's corners, edge midpoints and centroid (barycentric): where [`face_lifts_free`]
+/// clears a face's balls, and where the gate measures a face's slack in a spread field.
+pub(super) const FACE_SAMPLES: [[f64; 3]; 7] = [
     [1.0, 0.0, 0.0],
     [0.0, 1.0, 0.0],
     [0.0, 0.0, 1.0],
@@ -86,7 +87,7 @@ pub(super) fn cleared_lift_mm(faces: &FaceTree, p: DVec3, n: DVec3, face: usize,
 /// Whether every ball of radius `r` touching face `face` lifts by at most [`LIFT_FREE`]·h
 /// ([`cleared_lift_mm`]), so that none plans a lift and its centre is the offset's. The face's
 /// own tilt lifts them by at most [`crate::mesh::Surface::face_lift_mm`] (exact); the other
-/// facets within reach are sampled: balls touching at [`FREE_SAMPLES`] points, cleared of every
+/// facets within reach are sampled: balls touching at [`FACE_SAMPLES`] points, cleared of every
 /// facet, must lift by at most [`FREE_SAMPLED`] of the free lift (the lifts of one face's
 /// contacts vary smoothly, and the margin covers what lies between the samples). Most balls of a
 /// smooth part touch such faces; settling them here saves the clearance search the spacing
@@ -97,7 +98,7 @@ pub(super) fn face_lifts_free(surface: &Surface, faces: &FaceTree, face: usize, 
         return false;
     }
     let [a, b, c] = surface.triangles[face].map(|v| surface.positions[v as usize]);
-    FREE_SAMPLES.iter().all(|&bary| {
+    FACE_SAMPLES.iter().all(|&bary| {
         let n = surface.normal_at(face, bary);
         let (dir, lift) = cleared_lift_mm(faces, a * bary[0] + b * bary[1] + c * bary[2], n, face, r, h);
         dir == n && lift <= bound

@@ -386,17 +386,8 @@ const SLACK_FACTOR: f64 = 2.0;
 /// corners, its edges' middles and its centre (the corners too: in the pole star the P1 image
 /// is not the lift's even there).
 fn face_slack(f: u32, corners: [DVec2; 3], labels: Labels<'_>) -> f64 {
-    const THIRD: f64 = 1.0 / 3.0;
-    const AT: [[f64; 3]; 7] = [
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [0.5, 0.5, 0.0],
-        [0.0, 0.5, 0.5],
-        [0.5, 0.0, 0.5],
-        [THIRD, THIRD, THIRD],
-    ];
-    AT.iter()
+    super::facets::FACE_SAMPLES
+        .iter()
         .map(|&b| {
             let w = corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2];
             (labels.of(w, (f, b)).0 - w.y).abs()
