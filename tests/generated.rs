@@ -87,14 +87,19 @@ fn generated_parts_plan_within_the_scallop_limit() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The planner of a generated part, its mesh checked with the default options.
+fn planner(part: &generated::GeneratedPart) -> plan::Planner {
+    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
+    plan::Planner::new(out, &|| 0.0).expect("planner")
+}
+
 /// The sweep's worst peak outside any facet valley (issue 34's sweep, gen143: a 4k-face
 /// staircase rectangle, 1.142 h): the plan reports where it is, between which rings, in the
 /// slit domain, and that place is the verifier's worst sample.
 #[test]
 fn the_sweeps_worst_peak_is_located_between_its_rings() {
     let part = generated::part(143, slitpath::bench::SWEEP_FACES);
-    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
-    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let planner = planner(&part);
     let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
     let options = plan::PlanOptions { radius_mm: r, scallop_mm: h, verify_samples: 20_000, ..Default::default() };
     let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
@@ -141,8 +146,7 @@ fn issue_34_sweep_rings_are_spaced_for_their_balls_lift_off_the_facets() {
 /// at most 1.02 h outside the facet valleys, no gouge, nothing uncovered.
 fn stays_under_h_on_fresh_samples(seed: u64, samples: usize) {
     let part = generated::part(seed, slitpath::bench::SWEEP_FACES);
-    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
-    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let planner = planner(&part);
     let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
     let options = plan::PlanOptions { radius_mm: r, scallop_mm: h, verify_samples: 0, ..Default::default() };
     let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
@@ -217,8 +221,7 @@ fn issue_34_sweep_gen114_a_path_over_h_is_spaced_again() {
 #[test]
 fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again() {
     let part = generated::part(14, 8000..=8000);
-    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
-    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let planner = planner(&part);
     let h = 0.0157;
     let options = plan::PlanOptions {
         radius_mm: 2.29,
@@ -245,8 +248,7 @@ fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again(
 #[test]
 fn gen013_rings_spread_by_each_meridians_need_are_shorter_at_the_same_finish() {
     let part = generated::part(13, slitpath::bench::SWEEP_FACES);
-    let out = mesh::from_triangles(&part.mesh, &mesh::MeshOptions::default()).expect("mesh");
-    let planner = plan::Planner::new(out, &|| 0.0).expect("planner");
+    let planner = planner(&part);
     let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
     let options =
         plan::PlanOptions { radius_mm: r, scallop_mm: h, spread: plan::RingSpread::Need, ..Default::default() };

@@ -4,7 +4,7 @@
 
 use crate::mesh::Surface;
 use crate::num;
-use crate::slitmap::{Mode, SlitMap};
+use crate::slitmap::SlitMap;
 use glam::DVec2;
 
 /// Faces wider than this in angle (radians) are left to the w-plane check: the strip's straight
@@ -200,10 +200,7 @@ impl Field {
 /// the scale f(1)/(1 − r_min) of T = s·r that eq. 6 takes at the start (s² of
 /// [`super::Scale::Fixed`]). Slopes that are all zero (no energy) keep |w|.
 pub(super) fn initial_radii(map: &SlitMap, slopes: &[f64]) -> (Vec<f64>, f64) {
-    let r_min = match map.mode {
-        Mode::Disk => 0.0,
-        Mode::Annulus { inner_radius, .. } => inner_radius,
-    };
+    let r_min = map.mode.inner_radius();
     let bins = slopes.len();
     let width = (1.0 - r_min) / bins.max(1) as f64;
     // f at the bin edges.

@@ -246,10 +246,7 @@ pub fn optimise_observed(
     // Holes share one radius, the outer loop sits at 1 exactly.
     let x0 = field.unknowns(&r0);
     let r_start = field.radii(&x0);
-    let r_min = match map.mode {
-        crate::slitmap::Mode::Disk => 0.0,
-        crate::slitmap::Mode::Annulus { inner_radius, .. } => inner_radius,
-    };
+    let r_min = map.mode.inner_radius();
     let settings = energy::Settings {
         radius_mm: options.radius_mm,
         alpha: options.alpha * surface.area() / ALPHA_AREA_MM2,

@@ -217,10 +217,7 @@ impl<'a> EnergyEvaluator<'a> {
 
     /// Lower radius R_min and bin width of the bins over [R_min, 1].
     fn bin_frame(&self, mode: Mode) -> (f64, f64) {
-        let r_min = match mode {
-            Mode::Disk => 0.0,
-            Mode::Annulus { inner_radius, .. } => inner_radius,
-        };
+        let r_min = mode.inner_radius();
         (r_min, (1.0 - r_min) / self.bins as f64)
     }
 

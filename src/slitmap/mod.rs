@@ -292,6 +292,16 @@ pub enum Mode {
     Annulus { hole: usize, inner_radius: f64 },
 }
 
+impl Mode {
+    /// |w| of the domain's inner end: the annulus' inner circle, 0 (the pole) for the disk.
+    pub fn inner_radius(self) -> f64 {
+        match self {
+            Mode::Disk => 0.0,
+            Mode::Annulus { inner_radius, .. } => inner_radius,
+        }
+    }
+}
+
 /// An arc slit: the image of a hole, `{radius · e^{iθ} : θ ∈ [theta_start, theta_end]}` with
 /// `theta_start ∈ [−π, π)` and `theta_start ≤ theta_end < theta_start + 2π` (so an arc across
 /// the ±π cut has `theta_end > π`).

@@ -377,10 +377,7 @@ impl<'a> Spacer<'a> {
     fn new(lift: &'a Lift<'a>, index: SpacingIndex<'a>) -> Self {
         let SpacingIndex { surface, map, options, gate, slits, lift_h, corners, creases, forbidden } = index;
         let faces = if lift_h.is_some() { surface.triangles.len() } else { 0 };
-        let r_min = match map.mode {
-            Mode::Disk => 0.0,
-            Mode::Annulus { inner_radius, .. } => inner_radius,
-        };
+        let r_min = map.mode.inner_radius();
         Self {
             lift,
             gate,

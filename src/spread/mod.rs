@@ -163,10 +163,7 @@ fn check(o: &SpreadOptions) -> Result<(), SpreadError> {
 pub fn spread(lift: &Lift<'_>, options: &SpreadOptions) -> Result<Spread, SpreadError> {
     check(options)?;
     let map = lift.map();
-    let r_min = match map.mode {
-        Mode::Disk => 0.0,
-        Mode::Annulus { inner_radius, .. } => inner_radius,
-    };
+    let r_min = map.mode.inner_radius();
     let mut thetas = columns(lift, options);
     // Meridians at the slits' ends: every angle over a slit lies between two pinned meridians.
     for s in &map.slits {

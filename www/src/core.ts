@@ -124,7 +124,7 @@ export interface PlanOptions {
   /**
    * "none" (default): every meridian of the field gets the rings its worst one needs. "need":
    * a path whose rings are spread by each meridian's own need is planned too, and written when
-   * it is shorter at the same finish (planning takes three to six times as long).
+   * it is shorter at the same finish (planning takes about twice as long).
    */
   spread?: "none" | "need";
 }

@@ -140,7 +140,7 @@ mod cli {
             alpha: f64,
             /// none (every meridian gets the rings its worst one needs) or need (a path whose
             /// rings each meridian gets by its own need is planned too, and written when shorter
-            /// at the same finish: 8 % shorter on average, 3–6 times the planning time).
+            /// at the same finish: 8 % shorter on average, about twice the planning time).
             #[arg(long, default_value = "none")]
             spread: String,
             /// Where to write the G-code or CL data.
