@@ -287,14 +287,28 @@ fn plan_optimises_the_field_by_default_and_reports_it() {
     // A larger α is accepted and reported; a bad choice is one line on stderr.
     let (_, smoother) = run(&["--alpha", "100"]);
     assert_eq!(smoother["optimise"]["alpha"].as_f64(), Some(100.0));
-    // `--spread need` plans the field spread by each meridian's need too, and reports both paths
-    // (the one written is the shorter within h); a bad choice is one line on stderr.
+    // `--spread need` plans the field spread by each meridian's need first, and reports it: kept
+    // when it keeps h (the unspread path then not planned), else against the unspread path (the
+    // shorter within h is written, or the one that leaves less); a bad choice is one line on
+    // stderr.
     let (gcode, spread) = run(&["--spread", "need"]);
     let s = &spread["spread"];
     let written = spread["path"]["length_mm"].as_f64().unwrap();
-    let (mine, other) = (s["length_mm"].as_f64().unwrap(), s["unspread_length_mm"].as_f64().unwrap());
-    assert_eq!(s["kept"].as_bool(), Some(mine < other && s["max_over_h"].as_f64().unwrap() <= 1.0), "{s}");
-    assert_eq!(written, if s["kept"].as_bool().unwrap() { mine } else { other });
+    let (mine, mine_max) = (s["length_mm"].as_f64().unwrap(), s["max_over_h"].as_f64().unwrap());
+    match (s["unspread_length_mm"].as_f64(), s["unspread_max_over_h"].as_f64()) {
+        (None, None) => assert!(s["kept"].as_bool().unwrap() && mine_max <= 1.0, "{s}"),
+        (Some(other), Some(other_max)) => {
+            let kept = match (mine_max <= 1.0, other_max <= 1.0) {
+                (true, true) => mine < other,
+                (false, false) => mine_max < other_max,
+                (mine_keeps, _) => mine_keeps,
+            };
+            assert_eq!(s["kept"].as_bool(), Some(kept), "{s}");
+            assert_eq!(written, if kept { mine } else { other });
+        }
+        _ => panic!("{s}"),
+    }
+    assert_eq!(written == mine, s["kept"].as_bool().unwrap());
     assert_eq!(gcode.contains("spread by each meridian's need"), s["kept"].as_bool().unwrap());
     assert!(optimised.get("spread").is_none());
     let bad = slitpath(&["plan", part.to_str().unwrap(), "--spread", "wide", "-o", temp("w.ngc").to_str().unwrap()]);

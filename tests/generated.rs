@@ -241,6 +241,32 @@ fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again(
     assert!(v.uncovered_fraction > 0.01 && warned.contains(&unreached) && warned.contains("folds"), "{warned}");
 }
 
+/// Issue 32, found by stop 48's sweep: on gen009 (a 60 × 51 mm staircase rectangle, 11k faces)
+/// the spread path left 1.13 h and was dropped for the unspread one (1.83 times the flat-plate
+/// bound). Now a spread path that leaves more than h is spaced again like any other, and the
+/// unspread path planned beside it: the retry keeps h and is the shorter, so it is written (1.60
+/// times the bound).
+#[test]
+fn gen009_a_spread_path_over_h_is_spaced_again_and_kept_when_shorter() {
+    let part = generated::part(9, slitpath::bench::SWEEP_FACES);
+    let planner = planner(&part);
+    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
+    let options =
+        plan::PlanOptions { radius_mm: r, scallop_mm: h, spread: plan::RingSpread::Need, ..Default::default() };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let spread = p.report.spread.as_ref().expect("the spread path is reported");
+    println!("{spread:?} {:?}", p.report.spacing_retries);
+    let retry = p.report.spacing_retries.iter().find(|r| r.field == "tpsfo, spread").expect("the spread path's retry");
+    assert!(retry.max_over_h > 1.0 && retry.kept && retry.retry_max_over_h.is_some_and(|m| m <= 1.0), "{retry:?}");
+    let (Some(mine), Some(other)) = (spread.length_mm, spread.unspread_length_mm) else {
+        panic!("both paths planned: {spread:?}")
+    };
+    assert!(spread.kept && mine < 0.95 * other, "{spread:?}");
+    assert!(spread.unspread_max_over_h.is_some_and(|m| m <= 1.0), "{spread:?}");
+    assert_eq!((p.report.path.length_mm, retry.retry_length_mm), (mine, Some(mine)));
+    assert!(p.gcode.contains("spread by each meridian's need"), "the header names the field");
+}
+
 /// Issue 32: a 94 × 48 mm staircase rectangle with one hole (sweep part gen013, 6k faces). Its
 /// meridians to the far corners are the longest, and every ring of the field is spaced for
 /// them; spread by each meridian's need ([`plan::RingSpread::Need`]) the rings are fewer, and
@@ -255,8 +281,12 @@ fn gen013_rings_spread_by_each_meridians_need_are_shorter_at_the_same_finish() {
     let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
     let spread = p.report.spread.as_ref().expect("the spread path is reported");
     println!("{spread:?}");
+    // Kept at once: it keeps h, so the unspread path is not planned.
     assert!(spread.kept && spread.max_over_h.is_some_and(|m| m <= 1.0), "{spread:?}");
-    assert!(p.report.path.length_mm <= 0.88 * spread.unspread_length_mm, "{spread:?}");
+    assert_eq!((spread.unspread_length_mm, spread.unspread_max_over_h), (None, None));
+    let unspread = plan::PlanOptions { spread: plan::RingSpread::None, ..options.clone() };
+    let unspread = planner.plan(&unspread, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    assert!(p.report.path.length_mm <= 0.88 * unspread.report.path.length_mm, "{}", unspread.report.path.length_mm);
     assert_eq!(spread.length_mm, Some(p.report.path.length_mm));
     assert_eq!(p.report.path.retractions, 1, "one continuous spiral");
     // The gate's points of other bands, laid by its wide bands, are not counted against a ring.

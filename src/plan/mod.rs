@@ -73,7 +73,7 @@ pub struct PlanOptions {
     /// (see [`OptimiseOptions::alpha`]). Default 10.
     pub alpha: f64,
     /// Whether a path whose rings are spread by each meridian's own need ([`crate::spread`]) is
-    /// planned too, and written when shorter at the same finish. Default [`RingSpread::None`].
+    /// planned first, and written when it keeps h (see `plan/paths.rs`). Default [`RingSpread::None`].
     pub spread: RingSpread,
 }
 

@@ -16,6 +16,14 @@
 //!    map's 1.02 h) asked for 12 % smaller cusps, and its path came out 11 % longer than the
 //!    conformal map's (6 % longer than that one spaced again).
 //!
+//! 3. With `--spread need` the field's path spread by each meridian's need ([`crate::spread`])
+//!    comes first. When it keeps h as first spaced it is written, and the unspread path is not
+//!    planned. Else it is spaced again as in 2, the unspread path is planned as in 1 and 2, and
+//!    the shorter is written when both keep h, else the one that leaves less. (Stop 48 planned
+//!    both always: on the first 60 generated parts of the sweep the spread path kept h as first
+//!    spaced on 53, and was the longer on 7 of those, by 2.2 % at most. Its retry, kept without
+//!    the comparison, was 7 % longer than the unspread path on gen028.)
+//!
 //! A part whose first path keeps h costs nothing more and gets the same G-code. The retries are
 //! reported (`spacing_retries`), and so is the field kept (`optimise.path_field`).
 
@@ -67,10 +75,11 @@ pub(super) struct Field {
 
 impl Field {
     fn name(&self) -> &'static str {
-        if self.optimised {
-            "tpsfo"
-        } else {
-            "conformal"
+        match (self.optimised, self.spread) {
+            (true, false) => "tpsfo",
+            (false, false) => "conformal",
+            (true, true) => "tpsfo, spread",
+            (false, true) => "conformal, spread",
         }
     }
 
@@ -106,16 +115,18 @@ pub(super) struct Finished {
 /// without it (the plan report's `spread`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpreadSummary {
-    /// Whether the spread field's path was written: it keeps h outside the facet valleys, and is
-    /// shorter or the other one does not keep h.
+    /// Whether the spread field's path was written: it keeps h outside the facet valleys as
+    /// first spaced (then the unspread path is not planned), or after a retry and is shorter than
+    /// the unspread path, or it keeps h where that one does not, or leaves less.
     pub kept: bool,
     /// The spread field's path: its length and largest scallop outside the facet valleys over h
     /// (`None` when its plan failed, see `error`).
     pub length_mm: Option<f64>,
     pub max_over_h: Option<f64>,
-    /// The path without the spread: its length and largest scallop over h.
-    pub unspread_length_mm: f64,
-    pub unspread_max_over_h: f64,
+    /// The path without the spread, planned when the spread one left more than h as first
+    /// spaced: its length and largest scallop over h.
+    pub unspread_length_mm: Option<f64>,
+    pub unspread_max_over_h: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
@@ -124,7 +135,7 @@ pub struct SpreadSummary {
 /// again for a smaller cusp (the plan report's `spacing_retries`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpacingRetry {
-    /// `tpsfo` or `conformal`: the field both paths follow.
+    /// `tpsfo` or `conformal` (either `, spread`): the field both paths follow.
     pub field: &'static str,
     /// The first path's target (fraction of h), the largest scallop it left outside the facet
     /// valleys over h, and its length.
@@ -139,6 +150,20 @@ pub struct SpacingRetry {
     pub error: Option<String>,
     /// Whether the path spaced again was kept (it keeps h, or leaves less than the first).
     pub kept: bool,
+}
+
+impl SpreadSummary {
+    /// The spread path `fin`, kept at once: it keeps h.
+    fn first(fin: &Finished, h: f64) -> Self {
+        Self {
+            kept: true,
+            length_mm: Some(fin.summary.length_mm),
+            max_over_h: Some(fin.max_over_h(h)),
+            unspread_length_mm: None,
+            unspread_max_over_h: None,
+            error: None,
+        }
+    }
 }
 
 impl SpacingRetry {
@@ -211,7 +236,23 @@ impl Planner {
     ) -> Result<Finished, PlanError> {
         let h = run.options.scallop_mm;
         let conformal = tpsfo.then(|| map.clone());
-        let first = self.field(run, origin, map, tpsfo).and_then(|(field, optimise)| {
+        let field = self.field(run, origin, map, tpsfo);
+        // With `--spread need` the spread field's path comes first: when it keeps h as first
+        // spaced, it is written without planning the unspread one (step 3 of the module docs).
+        let spread_first = match (&field, run.options.spread) {
+            (Ok((field, optimise)), RingSpread::Need) => {
+                let spread = self.spread_path(run, origin, field);
+                match spread {
+                    Ok(fin) if !fin.exceeds(h) && fin.retries.is_empty() => {
+                        let summary = SpreadSummary::first(&fin, h);
+                        return Ok(Finished { optimise: optimise.clone(), spread: Some(summary), ..fin });
+                    }
+                    spread => Some(spread),
+                }
+            }
+            _ => None,
+        };
+        let first = field.and_then(|(field, optimise)| {
             let target = field.target_fraction();
             Ok(Finished { optimise, ..self.finish(run, origin, field, target)? })
         });
@@ -241,36 +282,52 @@ impl Planner {
             }
         };
         let chosen = self.retried(run, origin, chosen?);
-        Ok(match run.options.spread {
-            RingSpread::Need => self.spread_or(run, origin, chosen),
-            RingSpread::None => chosen,
+        Ok(match (run.options.spread, spread_first) {
+            (RingSpread::None, _) => chosen,
+            (RingSpread::Need, Some(spread)) => Self::spread_or(spread, chosen, h),
+            // The field failed: the spread follows the one the path was planned from.
+            (RingSpread::Need, None) => {
+                let spread = self.spread_path(run, origin, &chosen.field);
+                Self::spread_or(spread, chosen, h)
+            }
         })
     }
 
-    /// The path of `fin`'s field spread by each meridian's need, when it keeps h and is shorter
-    /// (or `fin` does not keep h), else `fin`; either way with the comparison reported.
-    fn spread_or(&self, run: &mut Run, origin: &Origin, fin: Finished) -> Finished {
-        let h = run.options.scallop_mm;
-        let field = Field { spread: true, ..fin.field.clone() };
+    /// The path of `field` spread by each meridian's need ([`crate::spread`]), spaced again
+    /// when it leaves more than h ([`Planner::retried`]).
+    fn spread_path(&self, run: &mut Run, origin: &Origin, field: &Field) -> Result<Finished, PlanError> {
+        let field = Field { spread: true, ..field.clone() };
         let target = field.target_fraction();
+        let fin = self.finish(run, origin, field, target)?;
+        Ok(self.retried(run, origin, fin))
+    }
+
+    /// The spread field's path `spread` when it is shorter and both keep h, or it keeps h where
+    /// `fin` does not, or both leave more and it leaves less; else `fin`. Either way with the
+    /// comparison reported.
+    fn spread_or(spread: Result<Finished, PlanError>, fin: Finished, h: f64) -> Finished {
         let mut summary = SpreadSummary {
             kept: false,
             length_mm: None,
             max_over_h: None,
-            unspread_length_mm: fin.summary.length_mm,
-            unspread_max_over_h: fin.max_over_h(h),
+            unspread_length_mm: Some(fin.summary.length_mm),
+            unspread_max_over_h: Some(fin.max_over_h(h)),
             error: None,
         };
-        match self.finish(run, origin, field, target) {
+        match spread {
             Ok(spread) => {
                 summary.length_mm = Some(spread.summary.length_mm);
                 summary.max_over_h = Some(spread.max_over_h(h));
-                summary.kept =
-                    !spread.exceeds(h) && (fin.exceeds(h) || spread.summary.length_mm < fin.summary.length_mm);
+                summary.kept = if spread.exceeds(h) || fin.exceeds(h) {
+                    spread.better_than(&fin, h)
+                } else {
+                    spread.summary.length_mm < fin.summary.length_mm
+                };
+                let retries: Vec<SpacingRetry> = spread.retries.iter().chain(&fin.retries).cloned().collect();
                 if summary.kept {
-                    let Finished { optimise, retries, .. } = fin;
-                    return Finished { optimise, retries, spread: Some(summary), ..spread };
+                    return Finished { optimise: fin.optimise, retries, spread: Some(summary), ..spread };
                 }
+                return Finished { retries, spread: Some(summary), ..fin };
             }
             Err(e) => summary.error = Some(e.to_string()),
         }

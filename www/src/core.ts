@@ -123,8 +123,8 @@ export interface PlanOptions {
   alpha?: number;
   /**
    * "none" (default): every meridian of the field gets the rings its worst one needs. "need":
-   * a path whose rings are spread by each meridian's own need is planned too, and written when
-   * it is shorter at the same finish (planning takes about twice as long).
+   * a path whose rings are spread by each meridian's own need is planned first, and written when
+   * it keeps h (planning takes about 1.6 times as long).
    */
   spread?: "none" | "need";
 }
@@ -164,14 +164,14 @@ export interface SpacingRetry {
 
 /** With `spread: "need"`: the spread field's path against the other (the report's `spread`). */
 export interface SpreadSummary {
-  /** Whether the spread field's path was written (it keeps h and is shorter, or the other does not keep h). */
+  /** Whether the spread field's path was written (it keeps h as first spaced; else it is the shorter within h, or leaves less). */
   kept: boolean;
   /** The spread field's path: length and largest scallop over h (null when its plan failed: see `error`). */
   length_mm: number | null;
   max_over_h: number | null;
-  /** The path without the spread. */
-  unspread_length_mm: number;
-  unspread_max_over_h: number;
+  /** The path without the spread: planned only when the spread one left more than h as first spaced (else null). */
+  unspread_length_mm: number | null;
+  unspread_max_over_h: number | null;
   error?: string;
 }
 

@@ -139,8 +139,8 @@ mod cli {
             #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
             alpha: f64,
             /// none (every meridian gets the rings its worst one needs) or need (a path whose
-            /// rings each meridian gets by its own need is planned too, and written when shorter
-            /// at the same finish: 8 % shorter on average, about twice the planning time).
+            /// rings each meridian gets by its own need is planned first, and written when it
+            /// keeps h: 8 % shorter on average, about 1.6 times the planning time).
             #[arg(long, default_value = "none")]
             spread: String,
             /// Where to write the G-code or CL data.

@@ -48,7 +48,8 @@ function rows(plan: PlanResult, limit: number): Row[] {
           : `conformal circles: ${optimise.fallback ?? "the optimised field was not used"}`,
       optimise !== undefined && optimise.path_field !== "tpsfo",
     ],
-    // Only with `spread: "need"`: both paths' lengths, and which one was written.
+    // Only with `spread: "need"`: the spread path's length, the unspread one's when it was planned,
+    // and which one was written.
     ...(spread === undefined
       ? []
       : [
@@ -57,8 +58,10 @@ function rows(plan: PlanResult, limit: number): Row[] {
             "Ring spread",
             spread.length_mm === null
               ? `not planned: ${spread.error ?? "failed"}`
-              : `${spread.kept ? "kept" : "not kept"}: ${n1.format(spread.length_mm)} mm against ${n1.format(spread.unspread_length_mm)} mm` +
-                ` (${n3.format(spread.max_over_h ?? 0)} h against ${n3.format(spread.unspread_max_over_h)} h)`,
+              : spread.unspread_length_mm === null
+                ? `kept: ${n1.format(spread.length_mm)} mm (${n3.format(spread.max_over_h ?? 0)} h); the unspread path was not needed`
+                : `${spread.kept ? "kept" : "not kept"}: ${n1.format(spread.length_mm)} mm against ${n1.format(spread.unspread_length_mm)} mm` +
+                  ` (${n3.format(spread.max_over_h ?? 0)} h against ${n3.format(spread.unspread_max_over_h ?? 0)} h)`,
             !spread.kept,
           ] satisfies Row,
         ]),
