@@ -241,6 +241,21 @@ fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again(
     assert!(v.uncovered_fraction > 0.01 && warned.contains(&unreached) && warned.contains("folds"), "{warned}");
 }
 
+/// Generated part `seed` planned with its own R and h and the ring spread (`--spread need`): its
+/// planner, the options and the plan.
+fn planned_with_spread(seed: u64) -> (plan::Planner, plan::PlanOptions, plan::Plan) {
+    let part = generated::part(seed, slitpath::bench::SWEEP_FACES);
+    let planner = planner(&part);
+    let options = plan::PlanOptions {
+        radius_mm: part.spec.radius_mm,
+        scallop_mm: part.spec.scallop_mm,
+        spread: plan::RingSpread::Need,
+        ..Default::default()
+    };
+    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    (planner, options, p)
+}
+
 /// Issue 32, found by stop 48's sweep: on gen009 (a 60 × 51 mm staircase rectangle, 11k faces)
 /// the spread path left 1.13 h and was dropped for the unspread one (1.83 times the flat-plate
 /// bound). Now a spread path that leaves more than h is spaced again like any other, and the
@@ -248,12 +263,7 @@ fn gen14_from_a_folding_pole_warns_of_the_missed_region_and_is_not_spaced_again(
 /// times the bound).
 #[test]
 fn gen009_a_spread_path_over_h_is_spaced_again_and_kept_when_shorter() {
-    let part = generated::part(9, slitpath::bench::SWEEP_FACES);
-    let planner = planner(&part);
-    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
-    let options =
-        plan::PlanOptions { radius_mm: r, scallop_mm: h, spread: plan::RingSpread::Need, ..Default::default() };
-    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let (_, _, p) = planned_with_spread(9);
     let spread = p.report.spread.as_ref().expect("the spread path is reported");
     println!("{spread:?} {:?}", p.report.spacing_retries);
     let retry = p.report.spacing_retries.iter().find(|r| r.field == "tpsfo, spread").expect("the spread path's retry");
@@ -273,12 +283,8 @@ fn gen009_a_spread_path_over_h_is_spaced_again_and_kept_when_shorter() {
 /// the path 18 % shorter (2.28 → 1.88 times the flat-plate bound), within h on fresh samples.
 #[test]
 fn gen013_rings_spread_by_each_meridians_need_are_shorter_at_the_same_finish() {
-    let part = generated::part(13, slitpath::bench::SWEEP_FACES);
-    let planner = planner(&part);
-    let (r, h) = (part.spec.radius_mm, part.spec.scallop_mm);
-    let options =
-        plan::PlanOptions { radius_mm: r, scallop_mm: h, spread: plan::RingSpread::Need, ..Default::default() };
-    let p = planner.plan(&options, &mut |_, _, _| {}, &|| 0.0).expect("plan");
+    let (planner, options, p) = planned_with_spread(13);
+    let h = options.scallop_mm;
     let spread = p.report.spread.as_ref().expect("the spread path is reported");
     println!("{spread:?}");
     // Kept at once: it keeps h, so the unspread path is not planned.
