@@ -240,16 +240,13 @@ impl Planner {
         // With `--spread need` the spread field's path comes first: when it keeps h as first
         // spaced, it is written without planning the unspread one (step 3 of the module docs).
         let spread_first = match (&field, run.options.spread) {
-            (Ok((field, optimise)), RingSpread::Need) => {
-                let spread = self.spread_path(run, origin, field);
-                match spread {
-                    Ok(fin) if !fin.exceeds(h) && fin.retries.is_empty() => {
-                        let summary = SpreadSummary::first(&fin, h);
-                        return Ok(Finished { optimise: optimise.clone(), spread: Some(summary), ..fin });
-                    }
-                    spread => Some(spread),
+            (Ok((field, optimise)), RingSpread::Need) => match self.spread_path(run, origin, field) {
+                Ok(fin) if !fin.exceeds(h) && fin.retries.is_empty() => {
+                    let summary = SpreadSummary::first(&fin, h);
+                    return Ok(Finished { optimise: optimise.clone(), spread: Some(summary), ..fin });
                 }
-            }
+                spread => Some(spread),
+            },
             _ => None,
         };
         let first = field.and_then(|(field, optimise)| {
