@@ -220,7 +220,7 @@ impl<'r> Cutter<'r> {
             i => out[first + i - 1],
         };
         // -1 below the band, 1 above, 0 inside (always, but in a spread field).
-        let spread = labels.0.is_some();
+        let spread = labels.is_spread();
         let place = |out: &[GatePoint], i: usize| {
             let rho = laid(out, i).2;
             if !spread || (rho > lo && rho < hi) {
@@ -268,9 +268,10 @@ impl<'r> Cutter<'r> {
             for _ in 0..CUSP_STEPS {
                 let u = if fb != fa { ua - fa * (ub - ua) / (fb - fa) } else { 0.5 * (ua + ub) };
                 let u = u.clamp(ua.min(ub), ua.max(ub));
-                let point = at(u);
+                // Only the point kept needs its radius (a spread field's costs a warp lookup).
+                let point = super::gate::at(a, b, u, labels.angles());
                 let Some((f, cut)) = self.side(&point, &mut search_hints) else { break };
-                best = (!cut).then_some(point);
+                best = (!cut).then_some(u);
                 if f == 0.0 {
                     break;
                 }
@@ -282,7 +283,7 @@ impl<'r> Cutter<'r> {
                     fa *= 0.5;
                 }
             }
-            out.extend(best);
+            out.extend(best.map(at));
         }
         out.drain(kept..first + count);
     }
@@ -430,10 +431,10 @@ mod tests {
         let end = |s: f64, z: f64| (dir * s + DVec3::Z * z, n, DVec2::new(theta, s / 10.0), (0, [0.0; 3]));
         let (a, b) = (end(10.0, 0.0), end(9.2, 0.005));
         let mut out = Vec::new();
-        line(a, b, 0.5, 4.0, Labels(None), &mut out);
+        line(a, b, 0.5, 4.0, Labels::new(None), &mut out);
         assert_eq!(out.len(), 4, "four points, none on the cusp");
         let laid = out.clone();
-        cutter.add_cusps(a, b, Labels(None), (0.0, 1.0), 0, &mut out);
+        cutter.add_cusps(a, b, Labels::new(None), (0.0, 1.0), 0, &mut out);
         // The two laid points nearest the rings are cut (the balls reach them) and dropped, the
         // two inner ones kept in order, and the cusp added after them.
         let uncut: Vec<GatePoint> = laid.iter().filter(|p| !cutter.cuts(p)).copied().collect();

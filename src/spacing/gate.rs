@@ -60,14 +60,34 @@ pub(super) type Site = (u32, [f64; 3]);
 /// point is labelled by the lift from the face it was laid in ([`Lift::image_of`]), exactly as
 /// the lift places rings, and no point is located on the surface again to be labelled.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Labels<'l>(pub(super) Option<&'l Lift<'l>>);
+pub(super) struct Labels<'l> {
+    lift: Option<&'l Lift<'l>>,
+    /// Whether the radius is wanted: [`Labels::angles`].
+    radius: bool,
+}
 
-impl Labels<'_> {
+impl<'l> Labels<'l> {
+    /// Labels by `lift` (a spread field's), or the P1 image's.
+    pub(super) fn new(lift: Option<&'l Lift<'l>>) -> Self {
+        Self { lift, radius: true }
+    }
+
+    /// These labels without the radius (the P1 image's is given): the angle alone, which the
+    /// cusp search's steps use, costs no warp lookup.
+    pub(super) fn angles(self) -> Self {
+        Self { radius: false, ..self }
+    }
+
+    pub(super) fn is_spread(self) -> bool {
+        self.lift.is_some()
+    }
+
     pub(super) fn of(self, w: DVec2, (face, bary): Site) -> (f64, f64) {
-        match self.0 {
-            None => (w.y, w.x),
-            Some(lift) => lift.image_of(face as usize, bary),
+        let Some(lift) = self.lift else { return (w.y, w.x) };
+        if !self.radius {
+            return (w.y, lift.angle_of(face as usize, bary));
         }
+        lift.image_of(face as usize, bary)
     }
 }
 
@@ -155,7 +175,7 @@ impl<'a> Gate<'a> {
         );
         let rho_range: Vec<(f64, f64)> =
             corners.iter().map(|c| (c[0].y.min(c[1].y).min(c[2].y), c[0].y.max(c[1].y).max(c[2].y))).collect();
-        let (face_slack, edge_slack) = match labels.0 {
+        let (face_slack, edge_slack) = match labels.lift {
             None => (Vec::new(), Vec::new()),
             Some(_) => crate::par::join(
                 || crate::par::each(corners.len(), |f| face_slack(f as u32, corners[f], labels)),
@@ -222,7 +242,7 @@ impl<'a> Gate<'a> {
     /// where the warp is smooth, much where its P1 image folds or in the pole star), and only the
     /// points the lift puts in the band are tested.
     pub(super) fn uncut(&self, lo: f64, hi: f64, labels: Labels<'_>, cutter: &Cutter<'_>) -> Vec<GatePoint> {
-        let spread = labels.0.is_some();
+        let spread = labels.is_spread();
         let pad = if spread { SPREAD_PAD * (hi - lo) } else { 0.0 };
         let (lay_lo, lay_hi) = (lo - pad, hi + pad);
         let widen = |slack: &[f64], i: usize| slack.get(i).map_or(0.0, |s| SLACK_FACTOR * s);
@@ -608,10 +628,10 @@ mod tests {
         let image = spread.image(&surface, &map);
         let lift = lift.spread(&image, spread);
         let faces = FaceTree::new(&surface.positions, &surface.triangles);
-        let gate = Gate::new(&surface, &image, Labels(Some(&lift)), &faces, 1.0, None);
+        let gate = Gate::new(&surface, &image, Labels::new(Some(&lift)), &faces, 1.0, None);
         // No rings: nothing is cut, every point of the band is returned.
         let (lo, hi) = (0.5, 0.56);
-        let points = gate.uncut(lo, hi, Labels(Some(&lift)), &Cutter::new(&[], 1.0, 0.01));
+        let points = gate.uncut(lo, hi, Labels::new(Some(&lift)), &Cutter::new(&[], 1.0, 0.01));
         assert!(points.len() > 1000, "{} points", points.len());
         // Each labelled as the lift reads its place on the surface (a brute-force oracle: the
         // nearest face), and inside the band.

@@ -249,6 +249,11 @@ impl<'a> Lift<'a> {
         (self.spread.as_ref().map_or(rho, |s| s.forward(theta, rho)), theta)
     }
 
+    /// The angle of [`Lift::image_of`] (a spread keeps angles).
+    pub fn angle_of(&self, face: usize, bary: [f64; 3]) -> f64 {
+        self.located_image_of(face, bary).1
+    }
+
     /// [`Lift::image_of`] in the located map.
     fn located_image_of(&self, face: usize, bary: [f64; 3]) -> (f64, f64) {
         if let Some(image) = self.star.as_ref().and_then(|star| star.image_of(face, bary)) {

@@ -359,7 +359,7 @@ impl<'a> SpacingIndex<'a> {
         // Independent indexes of the same map, built side by side.
         let ((corners, creases), gate) = crate::par::join(
             || (corner_angles(surface, map), creases(surface, map)),
-            || gate::Gate::new(surface, map, gate::Labels(spread), faces, options.radius_mm, lift_h),
+            || gate::Gate::new(surface, map, gate::Labels::new(spread), faces, options.radius_mm, lift_h),
         );
         Ok(Self { surface, map, options: options.clone(), gate, slits, lift_h, corners, creases, forbidden: merged })
     }
@@ -624,7 +624,7 @@ impl<'a> Spacer<'a> {
         let h = self.options.scallop_mm * GATE_FRACTION;
         let lines = ring_lines(upper, &lower);
         let cutter = cutter::Cutter::new(&lines, self.ball, h);
-        let bad = self.gate.uncut(lo, hi, gate::Labels(self.lift.is_spread().then_some(self.lift)), &cutter);
+        let bad = self.gate.uncut(lo, hi, gate::Labels::new(self.lift.is_spread().then_some(self.lift)), &cutter);
         Ok((lower, bad))
     }
 

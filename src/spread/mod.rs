@@ -100,8 +100,11 @@ pub struct Spread {
     thetas: Vec<f64>,
     /// Sampled radii, ascending from r_min to 1 (every slit's radius among them).
     rows: Vec<f64>,
-    /// g[j][k] on meridian j at row k: 1 at r_min, 0 at the rim, decreasing in k.
-    g: Vec<Vec<f64>>,
+    /// g of meridian j at row k, 1 at r_min, 0 at the rim, decreasing in k, at
+    /// `g[k * (thetas.len() + 1) + j]`; column `thetas.len()` repeats column 0 (the wrap). Row by
+    /// row, so that the two meridians round a query share a cache line at every row the
+    /// inverse's search reads (by meridian, those reads took twice the cache misses).
+    g: Vec<f64>,
     /// `thetas` and `rows` bucketed, for the lift's many queries.
     theta_buckets: Buckets,
     row_buckets: Buckets,
@@ -182,9 +185,10 @@ pub fn spread(lift: &Lift<'_>, options: &SpreadOptions) -> Result<Spread, Spread
     let raw: Vec<Vec<f64>> = needs.iter().map(|n| n.iter().map(|&x| x / n[0]).collect()).collect();
     let theta_buckets = Buckets::new(&thetas, 0.0, TAU, 4 * thetas.len());
     let row_buckets = Buckets::new(&rows, r_min, 1.0, 4 * rows.len());
-    let mut spread = Spread { r_min, thetas, rows, g: smooth(&raw, options.smoothing), theta_buckets, row_buckets };
-    spread.pin(map, options.pin_fade_rad);
-    Ok(spread)
+    let pinned = pin(&thetas, &rows, smooth(&raw, options.smoothing), map, options.pin_fade_rad);
+    let g =
+        (0..rows.len()).flat_map(|k| (0..=thetas.len()).map(move |j| (j, k))).map(|(j, k)| pinned[j % thetas.len()][k]);
+    Ok(Spread { r_min, g: g.collect(), thetas, rows, theta_buckets, row_buckets })
 }
 
 /// The need on the meridian `theta` from the rim inward to each of `rows`, in ideal rings.
@@ -258,53 +262,51 @@ fn columns(lift: &Lift<'_>, options: &SpreadOptions) -> Vec<f64> {
     out
 }
 
+/// The columns `g` (by meridian `thetas`, at `rows`) with every slit's radius pinned to one g
+/// over its span (see the module docs).
+fn pin(thetas: &[f64], rows: &[f64], g: Vec<Vec<f64>>, map: &SlitMap, fade: f64) -> Vec<Vec<f64>> {
+    // g of meridian j at `rho`.
+    let column_at = |j: usize, rho: f64| {
+        let k = rows.partition_point(|&r| r <= rho).clamp(1, rows.len() - 1) - 1;
+        let u = if rows[k + 1] > rows[k] { ((rho - rows[k]) / (rows[k + 1] - rows[k])).clamp(0.0, 1.0) } else { 0.0 };
+        g[j][k] * (1.0 - u) + g[j][k + 1] * u
+    };
+    let targets: Vec<f64> = map
+        .slits
+        .iter()
+        .map(|s| {
+            let over: Vec<f64> =
+                (0..thetas.len()).filter(|&j| s.contains_angle(thetas[j])).map(|j| column_at(j, s.radius)).collect();
+            if over.is_empty() {
+                0.5
+            } else {
+                over.iter().sum::<f64>() / over.len() as f64
+            }
+        })
+        .collect();
+    (0..thetas.len())
+        .map(|j| {
+            let theta = thetas[j];
+            // Knots (own g → pinned g), ascending.
+            let mut knots: Vec<(f64, f64)> = vec![(0.0, 0.0), (1.0, 1.0)];
+            for (s, &target) in map.slits.iter().zip(&targets) {
+                let weight = (1.0 - angular_distance(theta, s.theta_start, s.theta_end) / fade).clamp(0.0, 1.0);
+                if weight > 0.0 {
+                    let own = column_at(j, s.radius);
+                    knots.push((own, own + weight * (target - own)));
+                }
+            }
+            knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // Strictly increasing targets: two pins at crossed places keep the warp monotone.
+            for i in 1..knots.len() {
+                knots[i].1 = knots[i].1.max(knots[i - 1].1 + 1e-12);
+            }
+            g[j].iter().map(|&x| remap(&knots, x)).collect()
+        })
+        .collect()
+}
+
 impl Spread {
-    /// Pins every slit's radius to one g over its span (see the module docs).
-    fn pin(&mut self, map: &SlitMap, fade: f64) {
-        let targets: Vec<f64> = map
-            .slits
-            .iter()
-            .map(|s| {
-                let over: Vec<f64> = (0..self.thetas.len())
-                    .filter(|&j| s.contains_angle(self.thetas[j]))
-                    .map(|j| self.column_at(j, s.radius))
-                    .collect();
-                if over.is_empty() {
-                    0.5
-                } else {
-                    over.iter().sum::<f64>() / over.len() as f64
-                }
-            })
-            .collect();
-        let pinned: Vec<Vec<f64>> = (0..self.thetas.len())
-            .map(|j| {
-                let theta = self.thetas[j];
-                // Knots (own g → pinned g), ascending.
-                let mut knots: Vec<(f64, f64)> = vec![(0.0, 0.0), (1.0, 1.0)];
-                for (s, &target) in map.slits.iter().zip(&targets) {
-                    let weight = (1.0 - angular_distance(theta, s.theta_start, s.theta_end) / fade).clamp(0.0, 1.0);
-                    if weight > 0.0 {
-                        let own = self.column_at(j, s.radius);
-                        knots.push((own, own + weight * (target - own)));
-                    }
-                }
-                knots.sort_by(|a, b| a.0.total_cmp(&b.0));
-                // Strictly increasing targets: two pins at crossed places keep the warp monotone.
-                for i in 1..knots.len() {
-                    knots[i].1 = knots[i].1.max(knots[i - 1].1 + 1e-12);
-                }
-                self.g[j].iter().map(|&g| remap(&knots, g)).collect()
-            })
-            .collect();
-        self.g = pinned;
-    }
-
-    /// g of meridian `j` at `rho`.
-    fn column_at(&self, j: usize, rho: f64) -> f64 {
-        let (k, u) = self.row_at(rho);
-        self.g[j][k] * (1.0 - u) + self.g[j][k + 1] * u
-    }
-
     /// Row k and the weight of row k + 1 at `rho`.
     fn row_at(&self, rho: f64) -> (usize, f64) {
         let last = self.rows.len() - 1;
@@ -314,13 +316,14 @@ impl Spread {
         (k, if b > a { ((rho - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 })
     }
 
-    /// The two meridians round `theta` and the weight of the second.
-    fn columns_at(&self, theta: f64) -> (usize, usize, f64) {
+    /// The first of the two meridians round `theta` (the second is the next column of `g`) and
+    /// the weight of the second.
+    fn columns_at(&self, theta: f64) -> (usize, f64) {
         let theta = crate::num::rem_tau(theta);
         let n = self.thetas.len();
         let k = self.theta_buckets.partition_point(&self.thetas, theta);
-        let (j0, j1) = ((k + n - 1) % n, k % n);
-        let (t0, mut t1) = (self.thetas[j0], self.thetas[j1]);
+        let j0 = (k + n - 1) % n;
+        let (t0, mut t1) = (self.thetas[j0], self.thetas[(j0 + 1) % n]);
         let mut x = theta;
         if t1 <= t0 {
             t1 += TAU;
@@ -328,11 +331,13 @@ impl Spread {
                 x += TAU;
             }
         }
-        (j0, j1, if t1 > t0 { ((x - t0) / (t1 - t0)).clamp(0.0, 1.0) } else { 0.0 })
+        (j0, if t1 > t0 { ((x - t0) / (t1 - t0)).clamp(0.0, 1.0) } else { 0.0 })
     }
 
-    fn g_at(&self, (j0, j1, f): (usize, usize, f64), k: usize) -> f64 {
-        self.g[j0][k] * (1.0 - f) + self.g[j1][k] * f
+    /// g at row `k` between the meridians `columns_at` found.
+    fn g_at(&self, (j0, f): (usize, f64), k: usize) -> f64 {
+        let i = k * (self.thetas.len() + 1) + j0;
+        self.g[i] * (1.0 - f) + self.g[i + 1] * f
     }
 
     /// ρ' of the field's point (ρ, θ).
