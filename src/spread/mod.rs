@@ -186,9 +186,9 @@ pub fn spread(lift: &Lift<'_>, options: &SpreadOptions) -> Result<Spread, Spread
     let theta_buckets = Buckets::new(&thetas, 0.0, TAU, 4 * thetas.len());
     let row_buckets = Buckets::new(&rows, r_min, 1.0, 4 * rows.len());
     let pinned = pin(&thetas, &rows, smooth(&raw, options.smoothing), map, options.pin_fade_rad);
-    let g =
-        (0..rows.len()).flat_map(|k| (0..=thetas.len()).map(move |j| (j, k))).map(|(j, k)| pinned[j % thetas.len()][k]);
-    Ok(Spread { r_min, g: g.collect(), thetas, rows, theta_buckets, row_buckets })
+    // Row by row, column 0 again at the end of each (the wrap).
+    let g = (0..rows.len()).flat_map(|k| pinned.iter().chain(&pinned[..1]).map(move |column| column[k])).collect();
+    Ok(Spread { r_min, g, thetas, rows, theta_buckets, row_buckets })
 }
 
 /// The need on the meridian `theta` from the rim inward to each of `rows`, in ideal rings.
@@ -267,8 +267,7 @@ fn columns(lift: &Lift<'_>, options: &SpreadOptions) -> Vec<f64> {
 fn pin(thetas: &[f64], rows: &[f64], g: Vec<Vec<f64>>, map: &SlitMap, fade: f64) -> Vec<Vec<f64>> {
     // g of meridian j at `rho`.
     let column_at = |j: usize, rho: f64| {
-        let k = rows.partition_point(|&r| r <= rho).clamp(1, rows.len() - 1) - 1;
-        let u = if rows[k + 1] > rows[k] { ((rho - rows[k]) / (rows[k + 1] - rows[k])).clamp(0.0, 1.0) } else { 0.0 };
+        let (k, u) = bracket(rows, rows.partition_point(|&r| r <= rho), rho);
         g[j][k] * (1.0 - u) + g[j][k + 1] * u
     };
     let targets: Vec<f64> = map
@@ -309,11 +308,8 @@ fn pin(thetas: &[f64], rows: &[f64], g: Vec<Vec<f64>>, map: &SlitMap, fade: f64)
 impl Spread {
     /// Row k and the weight of row k + 1 at `rho`.
     fn row_at(&self, rho: f64) -> (usize, f64) {
-        let last = self.rows.len() - 1;
         let rho = rho.clamp(self.r_min, 1.0);
-        let k = self.row_buckets.partition_point(&self.rows, rho).clamp(1, last) - 1;
-        let (a, b) = (self.rows[k], self.rows[k + 1]);
-        (k, if b > a { ((rho - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 })
+        bracket(&self.rows, self.row_buckets.partition_point(&self.rows, rho), rho)
     }
 
     /// The first of the two meridians round `theta` (the second is the next column of `g`) and
@@ -398,6 +394,14 @@ impl Spread {
         }
         out
     }
+}
+
+/// The row k of `rows` below `rho` and the weight of row k + 1, from `above` = how many rows
+/// are ≤ `rho`.
+fn bracket(rows: &[f64], above: usize, rho: f64) -> (usize, f64) {
+    let k = above.clamp(1, rows.len() - 1) - 1;
+    let (a, b) = (rows[k], rows[k + 1]);
+    (k, if b > a { ((rho - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 })
 }
 
 /// Angle from `theta` to the arc [start, end] (0 on it).
