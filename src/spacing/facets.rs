@@ -196,7 +196,9 @@ mod tests {
             (certified, faces) = (certified + free.len(), faces + surface.triangles.len());
             for &f in &free {
                 let [a, b, c] = surface.triangles[f].map(|v| surface.positions[v as usize]);
-                for _ in 0..8 {
+                // 128 balls a face: a looser rule (the own tilt up to the whole free lift) passed
+                // with 8 and failed with 32 (beside an edge of gen000, 1.05 times the free lift).
+                for _ in 0..128 {
                     let (u, v) = (rng.unit(), rng.unit());
                     let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
                     let bary = [1.0 - u - v, u, v];

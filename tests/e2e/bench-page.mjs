@@ -106,6 +106,11 @@ try {
       await recordTimeline(page);
       await page.goto(`${server.url}?scallop=${c.scallop}&spread=${spread}`);
       await waitPlanned(page, 120_000);
+      // A worker's first plan compiles most of the core (docs/benchmarks.md, stop 51): the sample
+      // is what a user's first visit plans before their part, and without it the figures are a
+      // cold start's.
+      const sample = await status(page);
+      if (sample !== "planned") console.warn(`warning: the sample did not plan (${sample}): ${c.name}'s figures include compiling the core (scripts/bench-page.sh writes the sample)`);
       await page.getByTestId("stl-input").setInputFiles(file);
       let failed = "";
       await page
